@@ -1,0 +1,36 @@
+// The outcome of one cycle (trigger -> image -> localization -> pose), as handed to every
+// output: Modbus registers, robot dialects and the journal.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <vector>
+
+#include "core/pose.hpp"
+#include "core/status.hpp"
+
+namespace vgr {
+
+// Cycle ids stay below 2^23 (RAPID's num is a float): they wrap to 1 after kMaxCycleId.
+inline constexpr std::uint32_t kMaxCycleId = (1u << 23) - 1;
+
+struct PartResult {
+  Pose pose;          // part (grasp point) in the robot base frame, mm
+  Pose offset;        // T_ref^-1 * T_part: the offset from the job's taught reference
+  double uPx = 0;     // grasp point in the image, pixels (x right, y down, pixel centres at integers)
+  double vPx = 0;
+  double angleImgDeg = 0;  // part rotation in the image, degrees, counter-clockwise as displayed
+  double score = 0;        // 0..1
+};
+
+struct CycleResult {
+  std::uint32_t cycleId = 0;
+  Status status = Status::Internal;
+  int jobId = 0;
+  std::uint64_t frameId = 0;   // camera frame (GVSP block) id, 0 when no frame
+  std::vector<PartResult> parts;  // best first
+  double grabMs = 0, locateMs = 0, totalMs = 0;
+  std::chrono::system_clock::time_point triggerTime;
+};
+
+}  // namespace vgr

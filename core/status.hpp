@@ -1,0 +1,29 @@
+// One status table for robots, Modbus, journal and web (ARCHITECTURE.md, "Status codes").
+#pragma once
+
+#include <cstdint>
+#include <string_view>
+
+namespace vgr {
+
+enum class Status : std::int16_t {
+  Ok = 0,
+  NoPartFound = 1,
+  ResultNotReady = 2,
+  NoNewTrigger = 3,
+  UnknownCommand = -1,
+  BadArgument = -2,
+  BusyOverrun = -3,
+  CameraError = -4,
+  ProcessingTimeout = -5,
+  NotCalibrated = -6,
+  JobNotFound = -7,
+  Internal = -8,
+  OffsetOutOfLimits = -9,
+};
+
+// Upper-case name as in the table ("CAMERA_ERROR").
+std::string_view statusName(Status s);
+constexpr int statusCode(Status s) { return static_cast<int>(s); }
+
+}  // namespace vgr

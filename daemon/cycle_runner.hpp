@@ -1,0 +1,74 @@
+// Cycle orchestration: trigger -> image -> localization -> pose in robot frame -> sinks.
+// Triggers come from any thread through submit() (non-blocking, bounded queue); cycles run
+// one at a time on the cycle thread; every accepted trigger produces exactly one
+// CycleResult, by its deadline (an error status when the camera or vision cannot finish).
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <mutex>
+#include <thread>
+
+#include "config/cell_config.hpp"
+#include "core/cycle.hpp"
+#include "daemon/camera_worker.hpp"
+#include "vision/calib/plane_model.hpp"
+
+namespace vgr::daemon {
+
+enum class TriggerSource { Modbus, Robot, Operator };
+const char* triggerSourceName(TriggerSource s);
+
+struct CycleSinks {
+  // Cycle thread, when a cycle starts (the result is pending). Must not block.
+  std::function<void(std::uint32_t cycleId, int jobId)> onStarted;
+  // Cycle thread, once per accepted trigger. Must not block for long.
+  std::function<void(const CycleResult&)> onResult;
+};
+
+class CycleRunner {
+ public:
+  static constexpr std::size_t kQueueCapacity = 4;
+
+  CycleRunner(const config::CellConfig& cell, CameraWorker& camera, CycleSinks sinks);
+  ~CycleRunner();
+
+  void start();
+  void stop();  // finishes the running cycle, answers queued triggers with INTERNAL, joins
+
+  // Any thread, non-blocking. Returns the new cycle id, or 0 when the queue is full (the
+  // caller reports BUSY_OVERRUN). jobId 0 means the cell's first job.
+  std::uint32_t submit(int jobId, TriggerSource source);
+
+  std::uint64_t overruns() const { return overruns_.load(); }
+
+ private:
+  struct Trigger {
+    std::uint32_t cycleId;
+    int jobId;
+    TriggerSource source;
+    std::chrono::steady_clock::time_point at;
+    std::chrono::system_clock::time_point wallAt;
+  };
+  void run();
+  CycleResult runCycle(const Trigger& t);
+
+  const config::CellConfig& cell_;
+  CameraWorker& camera_;
+  CycleSinks sinks_;
+  vision::PinholePlaneModel model_;
+  std::thread thread_;
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  std::deque<Trigger> queue_;
+  bool stopping_ = false;
+  std::uint32_t nextCycleId_ = 1;
+  std::atomic<std::uint64_t> overruns_{0};
+  drivers::Frame frame_;
+};
+
+}  // namespace vgr::daemon

@@ -1,0 +1,25 @@
+// `vgr demo`: the whole simulated cell as separate processes on loopback — camera emulator,
+// vgrd, PLC simulator, one UR-dialect and one ABB-dialect robot simulator — for N cycles,
+// each checked against the renderer's ground truth. See docs/demo.md.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+namespace vgr::daemon {
+
+struct DemoOptions {
+  int cycles = 50;
+  std::string configPath;      // empty: the embedded config/examples/sim-cell.yaml
+  std::string binDir;          // where vgrd and the simulators are; empty: next to this executable
+  std::string workDir;         // empty: a fresh folder under /tmp
+  int intervalMs = 0;          // PLC pause between cycles
+  std::int64_t seed = -1;      // scene seed; -1: the config's sim.seed
+  bool quiet = false;          // no per-cycle lines
+};
+
+// Returns the process exit code: 0 when every cycle delivered a pose and every robot reply
+// was well-formed, 1 otherwise, 2 when the cell could not be started.
+int runDemo(const DemoOptions& options);
+
+}  // namespace vgr::daemon

@@ -1,0 +1,162 @@
+#include "protocol/modbus_map.hpp"
+
+#include <bit>
+#include <cmath>
+
+namespace vgr::protocol {
+
+namespace modbus {
+
+std::array<std::uint16_t, 2> packFloat(float value, WordOrder order) {
+  const auto bits = std::bit_cast<std::uint32_t>(value);
+  const auto high = static_cast<std::uint16_t>(bits >> 16);
+  const auto low = static_cast<std::uint16_t>(bits & 0xFFFFu);
+  if (order == WordOrder::HighWordFirst) return {high, low};
+  return {low, high};
+}
+
+float unpackFloat(std::uint16_t first, std::uint16_t second, WordOrder order) {
+  const std::uint16_t high = order == WordOrder::HighWordFirst ? first : second;
+  const std::uint16_t low = order == WordOrder::HighWordFirst ? second : first;
+  return std::bit_cast<float>((static_cast<std::uint32_t>(high) << 16) | low);
+}
+
+std::uint16_t toInt16Register(double value, double scale) {
+  const double scaled = value * scale;
+  if (std::isnan(scaled)) return 0;
+  const double rounded = std::round(scaled);
+  std::int16_t v;
+  if (rounded >= 32767.0) {
+    v = 32767;
+  } else if (rounded <= -32768.0) {
+    v = -32768;
+  } else {
+    v = static_cast<std::int16_t>(rounded);
+  }
+  return static_cast<std::uint16_t>(v);
+}
+
+}  // namespace modbus
+
+using namespace modbus;
+
+ModbusMap::ModbusMap(WordOrder floatOrder) : floatOrder_(floatOrder) {}
+
+void ModbusMap::set(std::uint16_t address, std::uint16_t value) {
+  holding_.at(address) = value;
+  input_.at(address) = value;
+}
+
+void ModbusMap::setStatusBits(std::uint16_t bits, bool on) {
+  const std::uint16_t s = status();
+  set(kStatus, static_cast<std::uint16_t>(on ? (s | bits) : (s & ~bits)));
+}
+
+void ModbusMap::writeFloat(std::uint16_t address, double value) {
+  const auto words = packFloat(static_cast<float>(value), floatOrder_);
+  set(address, words[0]);
+  set(static_cast<std::uint16_t>(address + 1), words[1]);
+}
+
+void ModbusMap::setReady(bool ready) { setStatusBits(kStatusReady, ready); }
+
+void ModbusMap::tick() { setStatusBits(kStatusHeartbeat, (status() & kStatusHeartbeat) == 0); }
+
+void ModbusMap::handleTriggerRequest(const TriggerFn& onTrigger, bool levelMode, HandshakeEvents& ev) {
+  if (busy()) {
+    ev.overrun = true;
+    setStatusBits(kStatusOverrun, true);
+    set(kErrorCode, toInt16Register(statusCode(Status::BusyOverrun)));
+    return;
+  }
+  if (!ready()) {
+    ev.ignoredNotReady = true;
+    return;
+  }
+  const int jobId = asInt16(holding_[kJobId]);
+  ev.jobId = jobId;
+  setStatusBits(kStatusResultValid | kStatusPartFound, false);
+  const std::uint32_t cycleId = onTrigger ? onTrigger(jobId) : 0;
+  if (cycleId == 0) {
+    // Refused: answer at once so the PLC never waits blindly.
+    // In level mode TRIGGER_ACK still follows TRIGGER so the PLC's sequence runs through.
+    ev.triggerRefused = true;
+    if (levelMode) setStatusBits(kStatusTriggerAck, true);
+    ModbusResult refused;
+    refused.status = Status::BusyOverrun;
+    refused.jobId = jobId;
+    refused.cycleId = input_[kResultId];  // RESULT_ID unchanged: no cycle was started
+    publishResult(refused);
+    return;
+  }
+  ev.triggerAccepted = true;
+  ev.cycleId = cycleId;
+  set(kAcqId, static_cast<std::uint16_t>(cycleId & 0xFFFFu));
+  set(kCurrentJob, toInt16Register(jobId));
+  setStatusBits(kStatusBusy | kStatusTriggerAck, true);
+  counterModeAck_ = !levelMode;
+}
+
+HandshakeEvents ModbusMap::onHoldingWritten(const TriggerFn& onTrigger) {
+  HandshakeEvents ev;
+  const std::uint16_t control = holding_[kControl];
+  const auto rising = static_cast<std::uint16_t>(control & ~lastControl_);
+  const auto falling = static_cast<std::uint16_t>(~control & lastControl_);
+  lastControl_ = control;
+  const std::uint16_t triggerId = holding_[kTriggerId];
+  const bool counterTrigger = triggerId != lastTriggerId_ && triggerId != 0;
+  lastTriggerId_ = triggerId;
+
+  // CLEAR_ERROR first, so "clear + trigger" in one write starts a clean cycle.
+  if ((rising & kControlClearError) != 0) {
+    ev.errorCleared = true;
+    setStatusBits(kStatusError | kStatusOverrun, false);
+    set(kErrorCode, 0);
+  }
+  if ((rising & kControlResultAck) != 0) {
+    ev.resultAcked = true;
+    setStatusBits(kStatusResultValid | kStatusPartFound, false);
+  }
+  if ((falling & kControlTrigger) != 0 && !counterModeAck_) {
+    setStatusBits(kStatusTriggerAck, false);
+  }
+  if ((rising & kControlTrigger) != 0) {
+    handleTriggerRequest(onTrigger, true, ev);
+  } else if (counterTrigger) {
+    handleTriggerRequest(onTrigger, false, ev);
+  }
+  return ev;
+}
+
+void ModbusMap::publishResult(const ModbusResult& r) {
+  const int code = statusCode(r.status);
+  set(kNumFound, toInt16Register(r.numFound));
+  set(kCurrentJob, toInt16Register(r.jobId));
+  writeFloat(kX, r.x);
+  writeFloat(kY, r.y);
+  writeFloat(kZ, r.z);
+  writeFloat(kR1, r.r1);
+  writeFloat(kR2, r.r2);
+  writeFloat(kR3, r.r3);
+  writeFloat(kScore, r.score);
+  set(kXInt, toInt16Register(r.x, 10.0));
+  set(kYInt, toInt16Register(r.y, 10.0));
+  set(kZInt, toInt16Register(r.z, 10.0));
+  set(kR1Int, toInt16Register(r.r1, 100.0));
+  set(kR2Int, toInt16Register(r.r2, 100.0));
+  set(kR3Int, toInt16Register(r.r3, 100.0));
+  // ERROR_CODE is the status of the result being published (0 OK, 1 NO_PART_FOUND,
+  // negative errors); the ERROR bit latches any error until CLEAR_ERROR.
+  set(kErrorCode, toInt16Register(code));
+  if (code < 0) setStatusBits(kStatusError, true);
+  set(kResultId, static_cast<std::uint16_t>(r.cycleId & 0xFFFFu));
+  setStatusBits(kStatusPartFound, r.status == Status::Ok);
+  setStatusBits(kStatusResultValid, true);
+  setStatusBits(kStatusBusy, false);
+  if (counterModeAck_) {
+    counterModeAck_ = false;
+    setStatusBits(kStatusTriggerAck, false);
+  }
+}
+
+}  // namespace vgr::protocol

@@ -1,0 +1,68 @@
+// Modbus TCP server for PLCs (PROTOCOLS.md, "PLC side: Modbus TCP"): the register map and
+// handshake of protocol/modbus_map.hpp served by libmodbus on one thread of its own.
+//
+// Threads: start()/stop()/destructor from the owning thread; setReady() and publishResult()
+// from any thread; the TriggerHandler runs on the Modbus thread. One mutex guards the map:
+// every client request is answered and its handshake logic run under it, so a reader never
+// sees half a result.
+// Clients: up to maxClients at once (more are accepted and closed at once). A client that
+// disconnects, sends a malformed frame (protocol id != 0, inconsistent length, unparsable)
+// or stalls mid-frame (> 200 ms between bytes) is dropped; the others are not disturbed.
+// Writes outside HR 0..15 get exception 02 (illegal data address); any unit id is served.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "core/result.hpp"
+#include "core/status.hpp"
+#include "protocol/modbus_map.hpp"  // WordOrder, ModbusResult, register constants
+
+namespace vgr::protocol {
+
+struct ModbusOptions {
+  std::string bind = "127.0.0.1";  // IPv4 address to listen on; "0.0.0.0" for all
+  std::uint16_t port = 1502;       // 0 = pick a free port (read it back with port())
+  WordOrder floatOrder = WordOrder::HighWordFirst;
+  int maxClients = 8;  // simultaneous PLC connections, [1, 64]
+};
+
+class ModbusServer {
+ public:
+  // Called on the Modbus thread, under the map lock, when a trigger is accepted. Must not
+  // block and must not call publishResult() synchronously (post it to another thread; a
+  // synchronous call is deferred until the handler returns). Returns the cycle id the
+  // daemon assigned (ACQ_ID = its low 16 bits), or 0 to refuse (the map then ends the
+  // trigger with RESULT_VALID + ERROR_CODE -3 BUSY_OVERRUN).
+  using TriggerHandler = std::function<std::uint32_t(int jobId)>;
+
+  ModbusServer(ModbusOptions options, TriggerHandler onTrigger);
+  ~ModbusServer();  // stops and joins
+  ModbusServer(const ModbusServer&) = delete;
+  ModbusServer& operator=(const ModbusServer&) = delete;
+
+  // Binds and listens (the error names bind address and port), then starts the thread.
+  // Fails when already started.
+  Result<void> start();
+  // Closes all connections and joins the thread. Idempotent; the map keeps its state.
+  void stop();
+
+  void setReady(bool ready);                  // any thread
+  void publishResult(const ModbusResult& r);  // any thread; one lock, results before RESULT_ID before RESULT_VALID
+
+  // The bound port once start() succeeded (the real one when options.port was 0), else
+  // options.port.
+  std::uint16_t port() const;
+
+  // Snapshot of one register (holding table, address < 64), for tests and diagnostics.
+  // Any thread.
+  std::uint16_t holdingRegister(std::uint16_t address) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace vgr::protocol

@@ -1,0 +1,76 @@
+// TCP endpoint for one robot (PROTOCOLS.md: the robot is the client, always speaks first,
+// and gets exactly one reply per request, in one write). Asio stays out of this header.
+//
+// Threads: everything runs on the ONE thread that runs the shared io_context (the daemon's
+// I/O thread); RobotServer is not thread-safe. Sockets are therefore not given strands:
+// the single I/O thread is their implicit strand.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "core/result.hpp"
+#include "protocol/robot_codec.hpp"
+
+namespace boost::asio {
+class io_context;
+}
+
+namespace vgr::protocol {
+
+struct RobotEndpoint {
+  std::string name;  // robot name from cell.yaml, used in logs and errors
+  Dialect dialect = Dialect::Ur;
+  std::string bind = "127.0.0.1";  // IP address ("0.0.0.0" / "::" for all) or host name
+  std::uint16_t port = 0;          // 0 = ephemeral (tests); see RobotServer::port()
+  std::size_t maxClients = 8;      // further connections are accepted and closed at once
+};
+
+// Sends the reply to the request it was handed for. Call exactly once, on the I/O thread
+// (a call from another thread is marshalled to the I/O thread, but do not rely on it).
+// Later calls, and calls after the connection closed or the server stopped, are ignored.
+// If every copy is destroyed without a call, the robot gets status INTERNAL (-8), so a
+// handler bug never leaves a robot waiting.
+using ReplyFn = std::function<void(const RobotReply&)>;
+
+// Called on the I/O thread for each well-formed request, one at a time per connection
+// (the next request of the same connection waits for this one's reply). Must not block:
+// keep `reply` and call it later (e.g. from a timer or a posted vision result) if the
+// answer is not ready. An exception escaping the handler is logged and answered INTERNAL.
+using RequestHandler = std::function<void(const std::string& robotName, const RobotRequest& req, ReplyFn reply)>;
+
+class RobotServer {
+ public:
+  // Borrows `io` (must outlive this object). Does not touch the network.
+  RobotServer(boost::asio::io_context& io, RobotEndpoint endpoint, RequestHandler handler);
+  // Calls stop(); same thread contract as stop().
+  ~RobotServer();
+  RobotServer(const RobotServer&) = delete;
+  RobotServer& operator=(const RobotServer&) = delete;
+
+  // Binds and listens synchronously (the error names the endpoint, address and port;
+  // status Internal), then accepts asynchronously on the io_context. Call before the I/O
+  // thread runs the io_context, or on the I/O thread. Fails if already started (a stopped
+  // server is not restarted: construct a new one).
+  Result<void> start();
+
+  // Closes the acceptor and every session (pending replies are dropped). Idempotent.
+  // Call on the I/O thread, or after the io_context stopped.
+  void stop();
+
+  // The bound port (the real one when the endpoint asked for 0); 0 before start().
+  std::uint16_t port() const;
+
+  const RobotEndpoint& endpoint() const;
+  // Connections currently open. I/O thread.
+  std::size_t clientCount() const;
+
+ private:
+  struct Listener;
+  std::shared_ptr<Listener> listener_;  // shared with its sessions' pending operations
+};
+
+}  // namespace vgr::protocol

@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# Installs vgr's build and test dependencies from Debian bookworm packages. Idempotent:
+# packages already present are left alone; apt's lists are refreshed only when something
+# is missing. Run as root (or through sudo).
+set -euo pipefail
+
+PACKAGES=(
+  build-essential cmake pkg-config ccache git
+  libopencv-dev libeigen3-dev
+  libaravis-dev aravis-tools libusb-1.0-0-dev
+  libmodbus-dev mbpoll python3-pymodbus
+  libboost-dev libspdlog-dev libfmt-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
+  libsystemd-dev systemd
+  libgtest-dev libgmock-dev libbenchmark-dev
+)
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${#PACKAGES[@]} packages present"
+  exit 0
+fi
+
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+echo "install-deps: installing ${missing[*]}"
+$SUDO apt-get update -qq
+DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"

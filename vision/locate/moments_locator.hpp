@@ -1,0 +1,35 @@
+// Method "moments" (paper 002): segmentation, then the centroid from the image moments
+// (eq. 12) and the orientation from the second-order central moments (eq. 13), made
+// unambiguous over 360 degrees by the sign of the third-order moment along the major axis.
+// Pure image code: call from any one thread per instance; no allocation is retained.
+#pragma once
+
+#include <vector>
+
+#include "core/result.hpp"
+
+namespace cv {
+class Mat;
+}
+
+namespace vgr::vision {
+
+struct MomentsParams {
+  int threshold = 0;        // gray level [0, 255]; 0 = Otsu
+  double minAreaPx = 2000;  // px²: smaller blobs are ignored (dust, noise)
+  double maxAreaPx = 1e7;   // px²: larger blobs are ignored (glare, a belt seam)
+};
+
+struct Detection {
+  double u = 0, v = 0;     // centroid, px (x right, y down, pixel centres at integers)
+  double angleDeg = 0;     // direction of the part's +x axis, counter-clockwise as displayed, (-180, 180]
+  double areaPx = 0;       // px²
+  double score = 0;        // 0..1: confidence that the orientation is well defined
+};
+
+// gray: 8-bit single channel, parts bright on a dark background. Parts touching the image
+// border are skipped (their moments would be wrong). Returns detections best score first;
+// an empty list means no part (not an error). Errors: Status::BadArgument for a wrong image type.
+Result<std::vector<Detection>> locateByMoments(const cv::Mat& gray, const MomentsParams& params);
+
+}  // namespace vgr::vision
