@@ -89,6 +89,15 @@ struct RobotTally {
 
 }  // namespace
 
+// The last lines of the cell's log, so a failed start says why right away.
+void printLogTail(const std::string& path, std::size_t lines = 6) {
+  std::ifstream in(path);
+  std::vector<std::string> all;
+  for (std::string l; std::getline(in, l);) all.push_back(l);
+  for (std::size_t i = all.size() > lines ? all.size() - lines : 0; i < all.size(); ++i)
+    std::fprintf(stderr, "  | %s\n", all[i].c_str());
+}
+
 int runDemo(const DemoOptions& o) {
   // The cell: the embedded example unless told otherwise.
   auto cfg = o.configPath.empty() ? config::parseCellConfig(config::embeddedSimCellYaml(), "<embedded sim-cell.yaml>")
@@ -125,6 +134,7 @@ int runDemo(const DemoOptions& o) {
                                     logs);
   if (!camera || !camera->waitForLine("\"ready\"", milliseconds(5000))) {
     std::fprintf(stderr, "vgr demo: the camera emulator did not start (see %s)\n", logs.c_str());
+    printLogTail(logs);
     return 2;
   }
 
@@ -135,6 +145,7 @@ int runDemo(const DemoOptions& o) {
   ::unsetenv("NOTIFY_SOCKET");
   if (!vgrd || !notify.ok() || !notify.waitFor("READY=1", milliseconds(15000), *vgrd)) {
     std::fprintf(stderr, "vgr demo: vgrd did not become ready (see %s)\n", logs.c_str());
+    printLogTail(logs);
     return 2;
   }
 
