@@ -139,12 +139,21 @@ class Cell : public ::testing::Test {
     std::vector<nlohmann::json> out;
     std::ifstream in(journalPath());
     std::string line;
-    while (std::getline(in, line)) out.push_back(nlohmann::json::parse(line));
+    while (std::getline(in, line)) {
+      // A line being written right now may be incomplete: only that one can fail to parse.
+      auto j = nlohmann::json::parse(line, nullptr, false);
+      if (!j.is_discarded()) out.push_back(std::move(j));
+    }
     return out;
   }
+  // The journal is written after the PLC and robots were served: give it a moment.
   nlohmann::json journalEntry(std::uint32_t cycle) const {
-    for (const auto& j : journal())
-      if (j.at("cycle").get<std::uint32_t>() == cycle) return j;
+    const auto deadline = Clock::now() + milliseconds(2000);
+    do {
+      for (const auto& j : journal())
+        if (j.at("cycle").get<std::uint32_t>() == cycle) return j;
+      std::this_thread::sleep_for(milliseconds(10));
+    } while (Clock::now() < deadline);
     return {};
   }
   vgr::sim::SceneTruth truthFor(std::uint64_t frameId) const {
