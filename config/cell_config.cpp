@@ -1,5 +1,8 @@
 #include "config/cell_config.hpp"
 
+#include <arpa/inet.h>
+#include <sys/socket.h>
+
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -127,16 +130,50 @@ std::function<bool(const std::string&)> oneOf(std::initializer_list<const char*>
 
 void parseCamera(Section s, CameraConfig& c) {
   s.read<std::string>("name", c.name);
-  s.read<std::string>("driver", c.driver, oneOf({"aravis"}), "one of: aravis");
+  s.read<std::string>("driver", c.driver, oneOf({"aravis", "replay"}), "one of: aravis, replay");
   s.read<std::string>("address", c.address);
   s.read<std::string>("serial", c.serial);
+  s.read<std::string>("user_name", c.userName);
   s.read<int>("timeout_ms", c.timeoutMs, inRange(50, 60000), "[50, 60000]");
-  s.read<double>("exposure_us", c.exposureUs, inRange(20.0, 1e6), "[20, 1000000]");
+  s.read<int>("retries", c.retries, inRange(0, 10), "[0, 10]");
+  s.read<double>("exposure_us", c.exposureUs, inRange(10.0, 1e8), "[10, 100000000]");
+  s.read<double>("gain", c.gain);
+  s.read<std::string>("pixel_format", c.pixelFormat,
+                      oneOf({"Mono8", "Mono10", "Mono12", "Mono16", "BayerRG8", "BayerGR8", "BayerGB8", "BayerBG8"}),
+                      "one of: Mono8, Mono10, Mono12, Mono16, BayerRG8, BayerGR8, BayerGB8, BayerBG8");
+  Section roi(s.file(), s.get("roi"), s.join("roi"));
+  roi.read<int>("x", c.roiX, inRange(0, 65535), "[0, 65535]");
+  roi.read<int>("y", c.roiY, inRange(0, 65535), "[0, 65535]");
+  roi.read<int>("width", c.roiWidth, inRange(0, 65535), "0 (rest of the sensor) or [1, 65535]");
+  roi.read<int>("height", c.roiHeight, inRange(0, 65535), "0 (rest of the sensor) or [1, 65535]");
+  roi.finish();
   s.read<int>("packet_size", c.packetSize, [](const int& v) { return v == 0 || (v >= 576 && v <= 65000); },
               "0 (negotiate) or [576, 65000]");
+  s.read<int>("packet_delay_ns", c.packetDelayNs, inRange(0, 1000000000), "[0, 1000000000]");
+  s.read<int>("socket_buffer_bytes", c.socketBufferBytes,
+              [](const int& v) { return v == 0 || (v >= 65536 && v <= (1 << 30)); }, "0 (auto) or [65536, 1073741824]");
+  s.read<bool>("packet_resend", c.packetResend);
+  s.read<int>("buffers", c.bufferCount, inRange(2, 64), "[2, 64]");
+  Section trig(s.file(), s.get("trigger"), s.join("trigger"));
+  std::string mode = "software";
+  trig.read<std::string>("mode", mode, oneOf({"software", "hardware", "free_run"}), "one of: software, hardware, free_run");
+  c.trigger = mode == "software" ? TriggerMode::Software : mode == "hardware" ? TriggerMode::Hardware : TriggerMode::FreeRun;
+  trig.read<std::string>("line", c.triggerLine);
+  trig.read<std::string>("activation", c.triggerActivation,
+                         oneOf({"RisingEdge", "FallingEdge", "AnyEdge", "LevelHigh", "LevelLow"}),
+                         "one of: RisingEdge, FallingEdge, AnyEdge, LevelHigh, LevelLow");
+  trig.read<double>("delay_us", c.triggerDelayUs, inRange(0.0, 1e6), "[0, 1000000]");
+  trig.finish();
+  Section replay(s.file(), s.get("replay"), s.join("replay"));
+  replay.read<std::string>("folder", c.replayFolder);
+  replay.read<bool>("loop", c.replayLoop);
+  replay.finish();
   s.read<int>("reconnect_min_ms", c.reconnectMinMs, inRange(10, 60000), "[10, 60000]");
   s.read<int>("reconnect_max_ms", c.reconnectMaxMs, inRange(10, 600000), "[10, 600000]");
-  if (c.address.empty() && c.serial.empty()) s.fail(s.node(), "address", "a camera needs an address or a serial");
+  if (c.driver == "aravis" && c.address.empty() && c.serial.empty() && c.userName.empty())
+    s.fail(s.node(), "address", "an aravis camera needs an address, a serial or a user_name");
+  if (c.driver == "replay" && c.replayFolder.empty())
+    s.fail(s.node(), "replay.folder", "a replay camera needs the folder of its images");
   if (c.reconnectMaxMs < c.reconnectMinMs)
     s.fail(s.get("reconnect_max_ms"), "reconnect_max_ms", "must not be below reconnect_min_ms");
   s.finish();
@@ -167,6 +204,55 @@ void parseModbus(Section s, ModbusConfig& m) {
   s.read<std::string>("float_word_order", order, oneOf({"high_word_first", "low_word_first"}),
                       "one of: high_word_first, low_word_first");
   m.floatWordOrder = order == "high_word_first" ? WordOrder::HighWordFirst : WordOrder::LowWordFirst;
+  s.read<int>("max_clients", m.maxClients, inRange(1, 64), "[1, 64]");
+  s.read<bool>("require_trigger_enable", m.requireTriggerEnable);
+
+  Section c(s.file(), s.get("client"), s.join("client"));
+  ModbusClientConfig& mc = m.client;
+  c.read<bool>("enabled", mc.enabled);
+  c.read<std::string>("host", mc.host);
+  int clientPort = mc.port;
+  c.read<int>("port", clientPort, inRange(1, 65535), "[1, 65535]");
+  mc.port = static_cast<std::uint16_t>(clientPort);
+  c.read<int>("unit_id", mc.unitId, inRange(0, 247), "[0, 247]");
+  std::string trigger = "discrete_input";
+  c.read<std::string>("trigger", trigger, oneOf({"discrete_input", "coil"}), "one of: discrete_input, coil");
+  mc.trigger = trigger == "coil" ? TriggerInputKind::Coil : TriggerInputKind::DiscreteInput;
+  c.read<int>("trigger_address", mc.triggerAddress, inRange(0, 65535), "[0, 65535]");
+  c.read<int>("status_address", mc.statusAddress, inRange(0, 65506), "[0, 65506]");
+  c.read<int>("poll_ms", mc.pollMs, inRange(1, 1000), "[1, 1000]");
+  c.read<int>("debounce_ms", mc.debounceMs, inRange(0, 10000), "[0, 10000]");
+  c.read<int>("job", mc.job, inRange(0, 32767), "[0, 32767]");
+  c.read<int>("reconnect_ms", mc.reconnectMs, inRange(10, 60000), "[10, 60000]");
+  c.finish();
+  s.finish();
+}
+
+// A token of the strict dialect: 1..64 printable ASCII characters, none of which a robot
+// program could use as a separator (space, ',', '#', CR, LF).
+bool validToken(const std::string& t) {
+  if (t.empty() || t.size() > 64) return false;
+  for (char c : t) {
+    if (c <= 0x20 || c >= 0x7F || c == ',' || c == '#') return false;
+  }
+  return true;
+}
+
+bool validIpAddress(const std::string& text) {
+  unsigned char buf[16];
+  return ::inet_pton(AF_INET, text.c_str(), buf) == 1 || ::inet_pton(AF_INET6, text.c_str(), buf) == 1;
+}
+
+void parseStrict(Section s, StrictConfig& c) {
+  const std::string tokenRange = "1 to 64 printable characters without spaces, ',' or '#'";
+  s.read<std::string>("command", c.command, validToken, tokenRange);
+  s.read<std::string>("ready", c.ready, validToken, tokenRange);
+  s.read<std::string>("done", c.done, validToken, tokenRange);
+  std::string lineEnd = "none";
+  s.read<std::string>("line_end", lineEnd, oneOf({"none", "lf", "crlf"}), "one of: none, lf, crlf");
+  c.lineEnd = lineEnd == "lf" ? "\n" : lineEnd == "crlf" ? "\r\n" : "";
+  s.read<int>("step_timeout_ms", c.stepTimeoutMs, inRange(50, 600000), "[50, 600000]");
+  if (c.ready == c.done) s.fail(s.get("done"), "done", "must differ from ready");
   s.finish();
 }
 
@@ -175,13 +261,45 @@ void parseRobot(Section s, RobotConfig& r) {
   s.require("port");
   s.read<std::string>("name", r.name);
   std::string dialect = "ur";
-  s.read<std::string>("dialect", dialect, oneOf({"ur", "abb"}), "one of: ur, abb");
-  r.dialect = dialect == "ur" ? Dialect::Ur : Dialect::Abb;
+  s.read<std::string>("dialect", dialect, oneOf({"ur", "abb", "fanuc", "binary", "strict"}),
+                      "one of: ur, abb, fanuc, binary, strict");
+  r.dialect = dialect == "ur"      ? Dialect::Ur
+              : dialect == "abb"   ? Dialect::Abb
+              : dialect == "fanuc" ? Dialect::Fanuc
+              : dialect == "binary" ? Dialect::Binary
+                                    : Dialect::Strict;
   s.read<std::string>("bind", r.bind);
   int port = 0;
   s.read<int>("port", port, inRange(1, 65535), "[1, 65535]");
   r.port = static_cast<std::uint16_t>(port);
   s.read<int>("reply_deadline_ms", r.replyDeadlineMs, inRange(50, 60000), "[50, 60000]");
+  s.read<int>("job", r.job, inRange(1, 32767), "[1, 32767]");
+  s.read<int>("max_clients", r.maxClients, inRange(1, 64), "[1, 64]");
+
+  const YAML::Node allowed = s.get("allowed_clients");
+  if (allowed && !allowed.IsNull()) {
+    if (!allowed.IsSequence()) s.fail(allowed, "allowed_clients", "expected a list of IP addresses");
+    for (std::size_t i = 0; i < allowed.size(); ++i) {
+      const std::string key = "allowed_clients[" + std::to_string(i) + "]";
+      const std::string text = allowed[i].IsScalar() ? allowed[i].Scalar() : std::string("<non-scalar>");
+      if (!allowed[i].IsScalar() || !validIpAddress(text))
+        s.fail(allowed[i], key, "expected a numeric IP address, got '" + text + "'");
+      r.allowedClients.push_back(text);
+    }
+  }
+
+  std::string order = "best_score";
+  s.read<std::string>("part_order", order, oneOf({"best_score", "by_label", "label_only"}),
+                      "one of: best_score, by_label, label_only");
+  r.partOrder = order == "best_score" ? PartOrder::BestScore : order == "by_label" ? PartOrder::ByLabel : PartOrder::LabelOnly;
+  s.read<int>("label", r.label, inRange(0, 32767), "[0, 32767]");
+  if (r.partOrder == PartOrder::LabelOnly && !s.get("label")) s.fail(s.node(), "label", "part_order label_only needs a label");
+
+  const YAML::Node strict = s.get("strict");
+  if (strict && !strict.IsNull()) {
+    if (r.dialect != Dialect::Strict) s.fail(strict, "strict", "only for dialect strict");
+    parseStrict(Section(s.file(), strict, s.join("strict")), r.strict);
+  }
   s.finish();
 }
 
@@ -260,6 +378,12 @@ CellConfig parse(const YAML::Node& root, const std::string& file) {
     if (!ids.insert(j.id).second) top.fail(jobs[i]["id"], path + ".id", "duplicate job id " + std::to_string(j.id));
     c.jobs.push_back(j);
   }
+  // A robot's default job must be one of the cell's jobs (checked once the jobs are known).
+  for (std::size_t i = 0; i < c.robots.size(); ++i) {
+    const int job = c.robots[i].job;
+    if (job != 0 && !ids.count(job))
+      top.fail(robots[i]["job"], "robots[" + std::to_string(i) + "].job", "no job with id " + std::to_string(job) + " in jobs");
+  }
 
   parseSim(Section(file, top.get("sim"), "sim"), c.sim);
   top.finish();
@@ -267,6 +391,26 @@ CellConfig parse(const YAML::Node& root, const std::string& file) {
 }
 
 }  // namespace
+
+const char* triggerModeName(TriggerMode m) {
+  switch (m) {
+    case TriggerMode::Software: return "software";
+    case TriggerMode::Hardware: return "hardware";
+    case TriggerMode::FreeRun: return "free_run";
+  }
+  return "software";
+}
+
+const char* dialectName(Dialect dialect) {
+  switch (dialect) {
+    case Dialect::Ur: return "ur";
+    case Dialect::Abb: return "abb";
+    case Dialect::Fanuc: return "fanuc";
+    case Dialect::Binary: return "binary";
+    case Dialect::Strict: return "strict";
+  }
+  return "?";
+}
 
 const JobConfig* CellConfig::findJob(int id) const {
   for (const auto& j : jobs)

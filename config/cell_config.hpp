@@ -13,19 +13,52 @@
 namespace vgr::config {
 
 enum class WordOrder { HighWordFirst, LowWordFirst };
-enum class Dialect { Ur, Abb };
+enum class Dialect { Ur, Abb, Fanuc, Binary, Strict };
+// The cell.yaml spelling: "ur", "abb", "fanuc", "binary", "strict".
+const char* dialectName(Dialect dialect);
+
+// Which part of a multi-part image a robot gets next (paper 002's sorting strategies).
+enum class PartOrder {
+  BestScore,  // "best_score": highest score first (the locator's order)
+  ByLabel,    // "by_label": ascending label, best score first within a label
+  LabelOnly,  // "label_only": only parts with RobotConfig::label, best score first
+};
+
+enum class TriggerMode { Software, Hardware, FreeRun };
 
 struct CameraConfig {
   std::string name = "cam0";
-  std::string driver = "aravis";   // registry name: "aravis"
-  std::string address;             // IP address (loopback for the emulator); preferred on loopback
-  std::string serial;              // optional; informative when address is set
+  std::string driver = "aravis";   // registry name: "aravis" or "replay"
+  // How to find the camera: by IP address (preferred; required on loopback), else by
+  // serial number (discovery, ~1 s), else by GenICam DeviceUserID. At least one is set
+  // for "aravis"; with address and serial both set the serial is checked after opening.
+  std::string address;
+  std::string serial;
+  std::string userName;
   int timeoutMs = 1000;            // ms, [50, 60000]: trigger -> frame before the frame counts as lost
-  double exposureUs = 5000;        // µs, [20, 1e6]
+  int retries = 1;                 // [0, 10]: re-triggers after a lost frame, within the cycle deadline
+  double exposureUs = 5000;        // µs, [10, 1e8]; the camera's own range is checked on open
+  double gain = -1;                // camera units (GenICam Gain/GainRaw); < 0 leaves the camera's value
+  // GenICam name: Mono8, Mono10, Mono12, Mono16 (10/12/16 bit delivered as 16-bit samples),
+  // BayerRG8, BayerGR8, BayerGB8, BayerBG8 (converted to Mono8 gray by the driver).
+  std::string pixelFormat = "Mono8";
+  int roiX = 0, roiY = 0;          // px, >= 0: region offset on the sensor
+  int roiWidth = 0, roiHeight = 0; // px, >= 0; 0 = the rest of the sensor from the offset
   int packetSize = 0;              // bytes, 0 (negotiate) or [576, 65000]: GigE Vision stream packet size
+  int packetDelayNs = 0;           // ns, [0, 1e9]: GigE inter-packet delay (GevSCPD)
+  int socketBufferBytes = 0;       // bytes, 0 (auto: one frame) or [65536, 1<<30]: UDP receive buffer
+  bool packetResend = true;        // ask the camera to resend lost GVSP packets
+  int bufferCount = 4;             // [2, 64]: preallocated frame buffers
+  TriggerMode trigger = TriggerMode::Software;
+  std::string triggerLine = "Line1";          // hardware trigger input (GenICam TriggerSource)
+  std::string triggerActivation = "RisingEdge";  // GenICam TriggerActivation
+  double triggerDelayUs = 0;       // µs, [0, 1e6]: line edge -> exposure (GenICam TriggerDelay)
+  std::string replayFolder;        // driver "replay": folder of images served in name order
+  bool replayLoop = true;          // driver "replay": start again after the last image
   int reconnectMinMs = 200;        // ms, [10, 60000]: first back-off after the camera drops out
   int reconnectMaxMs = 2000;       // ms, [reconnectMinMs, 600000]
 };
+const char* triggerModeName(TriggerMode m);  // "software", "hardware", "free_run"
 
 // Pinhole camera above the conveyor plane: the skeleton's "known model" mapping. Real
 // calibration files replace it (issue: calibration).
@@ -39,11 +72,41 @@ struct PlaneModelConfig {
   double planeZ = 0;                      // mm: conveyor plane height in the base frame
 };
 
+// Modbus client mode (docs/protocols.md): for PLCs that cannot write, vgrd polls a PLC
+// input (the laser sensor), triggers on its debounced rising edge and writes the status and
+// result block (the server's registers 16..45, same layout) to the PLC's holding registers.
+enum class TriggerInputKind { DiscreteInput, Coil };
+struct ModbusClientConfig {
+  bool enabled = false;
+  std::string host = "127.0.0.1";  // IPv4 address of the PLC (Modbus TCP server)
+  std::uint16_t port = 502;
+  int unitId = 1;                               // [0, 247]
+  TriggerInputKind trigger = TriggerInputKind::DiscreteInput;  // FC02 or FC01
+  int triggerAddress = 0;                       // [0, 65535], 0-based
+  int statusAddress = 100;                      // [0, 65506]: first of 30 holding registers written
+  int pollMs = 5;                               // ms, [1, 1000]: input poll period
+  int debounceMs = 20;                          // ms, [0, 10000]: a level must hold this long to count
+  int job = 0;                                  // job run on each trigger; 0 = the cell's first job
+  int reconnectMs = 500;                        // ms, [10, 60000]: pause before reconnecting
+};
+
 struct ModbusConfig {
   bool enabled = true;
   std::string bind = "127.0.0.1";
   std::uint16_t port = 1502;
   WordOrder floatWordOrder = WordOrder::HighWordFirst;
+  int maxClients = 8;                 // [1, 64]: PLC connections served at once
+  bool requireTriggerEnable = false;  // true: triggers count only while CONTROL b3 is set
+  ModbusClientConfig client;          // modbus.client
+};
+
+// Strict dialect (paper 002): the tokens the robot program uses, and the step timeout.
+struct StrictConfig {
+  std::string command = "MoveJ_pose";         // daemon -> robot; 1..64 printable, no spaces, ',' '#'
+  std::string ready = "MoveJ_pose_wait_pos";  // robot -> daemon: "send the pose"
+  std::string done = "MoveJ_pose_done";       // robot -> daemon: "move finished"
+  std::string lineEnd;                        // "" (none), "\n" (lf) or "\r\n" (crlf) after each send
+  int stepTimeoutMs = 10000;                  // ms, [50, 600000]: each of the two waits
 };
 
 struct RobotConfig {
@@ -52,6 +115,14 @@ struct RobotConfig {
   std::string bind = "127.0.0.1";
   std::uint16_t port = 0;
   int replyDeadlineMs = 1500;  // ms, [50, 60000]: a reply is always sent within this
+  int job = 0;                 // [1, 32767], a job id of the cell; 0 = the cell's first job.
+                               // What "GET" without a number (and the strict push) serves
+                               // until the robot sends "JOB,<n>".
+  int maxClients = 8;          // [1, 64]: a new connection from the same address replaces the oldest when full
+  std::vector<std::string> allowedClients;  // numeric IP addresses; empty = anyone
+  PartOrder partOrder = PartOrder::BestScore;
+  int label = 0;               // [0, 32767]: the one label served with part_order label_only
+  StrictConfig strict;         // dialect strict only
 };
 
 struct ReferencePose {

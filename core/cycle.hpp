@@ -21,6 +21,7 @@ struct PartResult {
   double vPx = 0;
   double angleImgDeg = 0;  // part rotation in the image, degrees, counter-clockwise as displayed
   double score = 0;        // 0..1
+  int label = 0;           // part class (paper 002's labels); 0 when the method does not classify
 };
 
 struct CycleResult {

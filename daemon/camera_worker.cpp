@@ -8,9 +8,15 @@ namespace vgr::daemon {
 
 using Clock = std::chrono::steady_clock;
 using std::chrono::milliseconds;
+using drivers::FrameStatus;
+
+namespace {
+// A re-trigger is only worth it with at least this much time left before the deadline.
+constexpr milliseconds kMinAttempt(20);
+}  // namespace
 
 CameraWorker::CameraWorker(config::CameraConfig config, std::unique_ptr<drivers::Camera> camera)
-    : cfg_(std::move(config)), camera_(std::move(camera)) {}
+    : cfg_(std::move(config)), camera_(std::move(camera)), describe_(camera_->describe()) {}
 
 CameraWorker::~CameraWorker() { stop(); }
 
@@ -25,7 +31,13 @@ void CameraWorker::stop() {
     stopping_ = true;
   }
   cv_.notify_all();
-  if (thread_.joinable()) thread_.join();
+  if (!thread_.joinable()) return;
+  thread_.join();
+  const auto c = counters();
+  log::info("camera", "{}: {} frames, {} failed ({} timeouts, {} incomplete), {} re-triggers ({} recovered), "
+            "{} reconnects, {} abandoned; packets missing {}, resent {}; underruns {}",
+            describe_, c.completed, c.failed, c.timeouts, c.incomplete, c.retries, c.recovered, c.reconnects,
+            c.abandoned, c.missingPackets, c.resentPackets, c.underruns);
 }
 
 bool CameraWorker::streaming() const {
@@ -43,19 +55,33 @@ CameraCounters CameraWorker::counters() const {
   return counters_;
 }
 
-Result<void> CameraWorker::grab(drivers::Frame& out, Clock::time_point deadline) {
+Result<void> CameraWorker::grab(drivers::Frame& out, Clock::time_point deadline, FrameStatus* status) {
+  auto setStatus = [&](FrameStatus s) {
+    if (status) *status = s;
+  };
   std::unique_lock lock(mutex_);
-  if (!streaming_) return fail(Status::CameraError, camera_->describe() + ": not connected (reconnecting)");
-  if (servedSeq_ != requestSeq_) return fail(Status::CameraError, camera_->describe() + ": still busy with an earlier trigger");
+  if (!streaming_) {
+    setStatus(FrameStatus::Disconnected);
+    return fail(Status::CameraError, describe_ + ": not connected (reconnecting)");
+  }
+  if (servedSeq_ != requestSeq_) {
+    setStatus(FrameStatus::Timeout);
+    return fail(Status::CameraError, describe_ + ": still busy with an earlier trigger");
+  }
   const std::uint64_t seq = ++requestSeq_;
   requestDeadline_ = deadline;
   cv_.notify_all();
   if (!cv_.wait_until(lock, deadline, [&] { return servedSeq_ >= seq || stopping_; })) {
     abandonedSeq_ = seq;
     counters_.abandoned++;
-    return fail(Status::CameraError, camera_->describe() + ": no frame before the cycle deadline");
+    setStatus(FrameStatus::Timeout);
+    return fail(Status::CameraError, describe_ + ": no frame before the cycle deadline");
   }
-  if (servedSeq_ < seq) return fail(Status::CameraError, "camera worker stopping");
+  if (servedSeq_ < seq) {
+    setStatus(FrameStatus::Failed);
+    return fail(Status::CameraError, "camera worker stopping");
+  }
+  setStatus(outcomeStatus_);
   if (!outcome_) return std::unexpected(outcome_.error());
   std::swap(out, frame_);
   return {};
@@ -79,20 +105,82 @@ void CameraWorker::disconnect() {
     std::lock_guard lock(mutex_);
     streaming_ = false;
   }
-  camera_->close();  // may block ~2.5 s on a dead GigE device: we are on our own thread
+  camera_->close();  // may block on a dead GigE device: we are on our own thread
+}
+
+void CameraWorker::serve(std::uint64_t seq) {
+  Clock::time_point deadline;
+  {
+    std::lock_guard lock(mutex_);
+    deadline = requestDeadline_;
+  }
+  drivers::Frame& target = frame_;  // only this thread touches frame_ between swaps
+  Result<void> r;
+  FrameStatus st = FrameStatus::Ok;
+  int attempt = 0;
+  for (;;) {
+    const auto left = std::chrono::duration_cast<milliseconds>(deadline - Clock::now());
+    const milliseconds timeout = std::clamp(left, milliseconds(1), milliseconds(cfg_.timeoutMs));
+    r = camera_->triggerAndWait(target, timeout);
+    st = r ? FrameStatus::Ok : camera_->lastFrameStatus();
+    consecutiveTimeouts_ = st == FrameStatus::Timeout ? consecutiveTimeouts_ + 1 : 0;
+    // Re-trigger only lost frames (a device problem is not cured by asking again).
+    if (r || attempt >= cfg_.retries || (st != FrameStatus::Timeout && st != FrameStatus::Incomplete)) break;
+    if (deadline - Clock::now() < kMinAttempt) break;
+    ++attempt;
+    log::debug("camera", "{}: {}; re-trigger {} of {}", describe_, r.error().message, attempt, cfg_.retries);
+    std::lock_guard lock(mutex_);
+    counters_.retries++;
+  }
+
+  const drivers::CameraStats ds = camera_->stats();
+  bool late;
+  {
+    std::lock_guard lock(mutex_);
+    outcome_ = r;
+    outcomeStatus_ = st;
+    servedSeq_ = seq;
+    late = abandonedSeq_ == seq;
+    if (!late) {
+      if (r) {
+        counters_.completed++;
+        if (attempt > 0) counters_.recovered++;
+      } else {
+        counters_.failed++;
+        if (st == FrameStatus::Timeout) counters_.timeouts++;
+        if (st == FrameStatus::Incomplete) counters_.incomplete++;
+      }
+    }
+    counters_.underruns = ds.underruns;
+    counters_.missingPackets = ds.missingPackets;
+    counters_.resentPackets = ds.resentPackets;
+  }
+  cv_.notify_all();
+  if (late) log::debug("camera", "{}: outcome for an abandoned trigger dropped", describe_);
+  if (!r) {
+    log::warn("camera", "{}", r.error().message);
+    // A refused command or a lost control channel means the device is gone (or restarted);
+    // in software-trigger mode, two triggers in a row without any frame likely too.
+    const bool softwareStuck = cfg_.trigger == config::TriggerMode::Software && consecutiveTimeouts_ >= 2;
+    if (st == FrameStatus::Disconnected || camera_->controlLost() || softwareStuck) {
+      log::warn("camera", "{}: reconnecting", describe_);
+      consecutiveTimeouts_ = 0;
+      disconnect();
+    }
+  }
 }
 
 void CameraWorker::run() {
   int backoffMs = cfg_.reconnectMinMs;
   bool everConnected = false;
   bool reportedDown = false;
-  int consecutiveFailures = 0;
   for (;;) {
     {
       std::lock_guard lock(mutex_);
       if (stopping_) break;
     }
     if (camera_->state() != drivers::CameraState::Streaming) {
+      const auto t0 = Clock::now();
       if (connect()) {
         {
           std::lock_guard lock(mutex_);
@@ -100,13 +188,13 @@ void CameraWorker::run() {
           if (everConnected) counters_.reconnects++;
         }
         cv_.notify_all();
-        log::info("camera", "{}: {}", camera_->describe(), everConnected ? "reconnected" : "streaming");
+        log::info("camera", "{}: {} ({} ms)", describe_, everConnected ? "reconnected" : "streaming",
+                  std::chrono::duration_cast<milliseconds>(Clock::now() - t0).count());
         everConnected = true;
         reportedDown = false;
         backoffMs = cfg_.reconnectMinMs;
-        consecutiveFailures = 0;
       } else {
-        if (!reportedDown) log::warn("camera", "{}: cannot connect; retrying with back-off up to {} ms", camera_->describe(), cfg_.reconnectMaxMs);
+        if (!reportedDown) log::warn("camera", "{}: cannot connect; retrying with back-off up to {} ms", describe_, cfg_.reconnectMaxMs);
         reportedDown = true;
         std::unique_lock lock(mutex_);
         cv_.wait_for(lock, milliseconds(backoffMs), [this] { return stopping_; });
@@ -123,45 +211,14 @@ void CameraWorker::run() {
     if (requestSeq_ == servedSeq_) {
       lock.unlock();
       if (camera_->controlLost()) {
-        log::warn("camera", "{}: control channel lost; reconnecting", camera_->describe());
+        log::warn("camera", "{}: control channel lost; reconnecting", describe_);
         disconnect();
       }
       continue;
     }
     const std::uint64_t seq = requestSeq_;
-    const auto left = std::chrono::duration_cast<milliseconds>(requestDeadline_ - Clock::now());
     lock.unlock();
-
-    drivers::Frame& target = frame_;  // only this thread touches frame_ between swaps
-    const milliseconds timeout = std::clamp(left, milliseconds(1), milliseconds(cfg_.timeoutMs));
-    Result<void> r = camera_->triggerAndWait(target, timeout);
-
-    lock.lock();
-    outcome_ = r;
-    servedSeq_ = seq;
-    if (r) {
-      counters_.completed++;
-    } else {
-      counters_.failed++;
-      if (camera_->lastFrameStatus() == drivers::FrameStatus::Timeout) counters_.timeouts++;
-    }
-    const bool late = abandonedSeq_ == seq;
-    lock.unlock();
-    cv_.notify_all();
-    if (late) log::debug("camera", "{}: frame for an abandoned trigger dropped", camera_->describe());
-
-    if (r) {
-      consecutiveFailures = 0;
-    } else {
-      ++consecutiveFailures;
-      log::warn("camera", "{} ({})", r.error().message, drivers::frameStatusName(camera_->lastFrameStatus()));
-      // A refused command means the device is gone; two lost frames in a row likely too.
-      if (camera_->lastFrameStatus() == drivers::FrameStatus::Disconnected || camera_->controlLost() ||
-          consecutiveFailures >= 2) {
-        log::warn("camera", "{}: reconnecting", camera_->describe());
-        disconnect();
-      }
-    }
+    serve(seq);
   }
   disconnect();
 }

@@ -1,7 +1,9 @@
 // The acquisition thread of one camera. It owns the Camera (whose calls may block for
-// seconds when the device is gone), reconnects with back-off when the device drops out,
-// and hands frames to the cycle thread. grab() never waits past its deadline: a camera
-// that hangs costs one cycle a CAMERA_ERROR, not a hung trigger.
+// seconds when the device is gone), reconnects with back-off when the device drops out
+// (re-applying every feature: Camera::open does), re-triggers lost frames within the
+// caller's deadline (camera.retries), and hands frames to the cycle thread. grab() never
+// waits past its deadline: a camera that hangs costs one cycle a CAMERA_ERROR, not a hung
+// trigger.
 #pragma once
 
 #include <chrono>
@@ -19,7 +21,13 @@
 namespace vgr::daemon {
 
 struct CameraCounters {
+  // Per grab() (one cycle): completed + failed + abandoned = grabs that reached the camera.
   std::uint64_t completed = 0, failed = 0, timeouts = 0, reconnects = 0, abandoned = 0;
+  std::uint64_t incomplete = 0;  // failed grabs whose last attempt had missing packets
+  std::uint64_t retries = 0;     // re-triggers after a lost frame
+  std::uint64_t recovered = 0;   // grabs that got their frame on a re-trigger
+  // From the driver (cumulative over reconnects).
+  std::uint64_t underruns = 0, missingPackets = 0, resentPackets = 0;
 };
 
 class CameraWorker {
@@ -28,25 +36,31 @@ class CameraWorker {
   ~CameraWorker();  // stops and joins
 
   void start();
-  void stop();
+  void stop();  // joins the thread and logs the counters once
 
-  // Cycle thread. Triggers one frame and waits for it until `deadline`. On success the
-  // frame is swapped into `out` (no copy, no allocation once warm).
-  Result<void> grab(drivers::Frame& out, std::chrono::steady_clock::time_point deadline);
+  // Cycle thread. Triggers one frame (re-triggering up to camera.retries times after a lost
+  // frame while the deadline allows) and waits for it until `deadline`. On success the
+  // frame is swapped into `out` (no copy, no allocation once warm). `status`, if given,
+  // receives the typed outcome (Ok, Timeout, Incomplete, Disconnected, ...).
+  Result<void> grab(drivers::Frame& out, std::chrono::steady_clock::time_point deadline,
+                    drivers::FrameStatus* status = nullptr);
 
   // Any thread: true while the camera is open and streaming.
   bool streaming() const;
   // Blocks until the camera streams for the first time or `timeout` passes.
   bool waitStreaming(std::chrono::milliseconds timeout);
   CameraCounters counters() const;
+  std::string describe() const { return describe_; }
 
  private:
   void run();
   bool connect();      // acquisition thread
   void disconnect();   // acquisition thread
+  void serve(std::uint64_t seq);  // acquisition thread: one request with its retries
 
   config::CameraConfig cfg_;
   std::unique_ptr<drivers::Camera> camera_;
+  const std::string describe_;
   std::thread thread_;
 
   mutable std::mutex mutex_;
@@ -59,8 +73,10 @@ class CameraWorker {
   std::uint64_t abandonedSeq_ = 0;  // the requester gave up waiting for this one
   std::chrono::steady_clock::time_point requestDeadline_;
   Result<void> outcome_;
+  drivers::FrameStatus outcomeStatus_ = drivers::FrameStatus::Ok;
   drivers::Frame frame_;            // filled by the acquisition thread, swapped out by grab()
   CameraCounters counters_;
+  int consecutiveTimeouts_ = 0;     // acquisition thread
 };
 
 }  // namespace vgr::daemon

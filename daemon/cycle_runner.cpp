@@ -125,7 +125,14 @@ CycleResult CycleRunner::runCycle(const Trigger& t) {
   r.frameId = frame_.frameId;
 
   const auto locateStart = Clock::now();
-  const cv::Mat image(frame_.height, frame_.width, CV_8UC1, frame_.data.data());
+  cv::Mat image(frame_.height, frame_.width, CV_8UC1, frame_.data.data());
+  if (frame_.pixel == drivers::PixelType::Mono16) {
+    // The locator works on 8-bit gray: keep the top 8 of the camera's significant bits.
+    thread_local cv::Mat gray8;  // cycle thread; reused between cycles
+    const cv::Mat wide(frame_.height, frame_.width, CV_16UC1, frame_.data.data());
+    wide.convertTo(gray8, CV_8UC1, 1.0 / (1 << (frame_.bitDepth - 8)));
+    image = gray8;
+  }
   vision::MomentsParams params;
   params.threshold = job->threshold;
   params.minAreaPx = job->minAreaPx;

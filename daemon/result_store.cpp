@@ -1,5 +1,8 @@
 #include "daemon/result_store.hpp"
 
+#include <algorithm>
+#include <chrono>
+
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/steady_timer.hpp>
 
@@ -14,18 +17,62 @@ struct ResultStore::Waiter {
   explicit Waiter(boost::asio::io_context& io) : timer(io) {}
 };
 
-ResultStore::ResultStore(boost::asio::io_context& io, std::set<int> knownJobs) : io_(io), knownJobs_(std::move(knownJobs)) {}
+ResultStore::ResultStore(boost::asio::io_context& io, std::set<int> knownJobs)
+    : io_(io), knownJobs_(std::move(knownJobs)) {}
 
 ResultStore::~ResultStore() {
   for (auto& [id, w] : waiters_) w->timer.cancel();
 }
 
-protocol::RobotReply ResultStore::toReply(const CycleResult& r) {
-  protocol::RobotReply reply;
-  reply.status = r.status;
-  reply.cycleId = r.cycleId;
-  if (r.status == Status::Ok && !r.parts.empty()) reply.pose = r.parts.front().pose;
-  return reply;
+void ResultStore::addRobot(const std::string& robot, RobotPolicy policy) {
+  RobotState& s = robots_[robot];
+  s.policy = policy;
+  s.currentJob = policy.job != 0 ? policy.job : (knownJobs_.empty() ? 0 : *knownJobs_.begin());
+}
+
+ResultStore::RobotState& ResultStore::state(const std::string& robot) {
+  auto it = robots_.find(robot);
+  if (it == robots_.end()) {
+    addRobot(robot, RobotPolicy{});
+    it = robots_.find(robot);
+  }
+  return it->second;
+}
+
+int ResultStore::currentJob(const std::string& robot) const {
+  auto it = robots_.find(robot);
+  if (it != robots_.end()) return it->second.currentJob;
+  return knownJobs_.empty() ? 0 : *knownJobs_.begin();
+}
+
+std::vector<protocol::RobotReply> ResultStore::replies(const CycleResult& r, const RobotPolicy& policy) {
+  std::vector<protocol::RobotReply> out;
+  protocol::RobotReply base;
+  base.cycleId = r.cycleId;
+  base.status = r.status;
+  if (r.status != Status::Ok) {
+    out.push_back(base);
+    return out;
+  }
+  // The locator's order is best first; stable sorts and filters keep it within a label.
+  std::vector<const PartResult*> parts;
+  for (const PartResult& p : r.parts) {
+    if (policy.order == PartOrder::LabelOnly && p.label != policy.label) continue;
+    parts.push_back(&p);
+  }
+  if (policy.order == PartOrder::ByLabel)
+    std::stable_sort(parts.begin(), parts.end(), [](const PartResult* a, const PartResult* b) { return a->label < b->label; });
+  if (parts.empty()) {
+    base.status = Status::NoPartFound;
+    out.push_back(base);
+    return out;
+  }
+  for (const PartResult* p : parts) {
+    protocol::RobotReply reply = base;
+    reply.pose = p->pose;
+    out.push_back(reply);
+  }
+  return out;
 }
 
 void ResultStore::answer(Waiter& w, const protocol::RobotReply& reply) {
@@ -35,56 +82,90 @@ void ResultStore::answer(Waiter& w, const protocol::RobotReply& reply) {
   w.reply(reply);
 }
 
+bool ResultStore::serveNext(const std::string& robot, int job, const protocol::ReplyFn& reply) {
+  auto it = latest_.find(job);
+  if (it == latest_.end()) return false;
+  RobotState& s = state(robot);
+  Progress& p = s.progress[job];
+  if (p.cycleId != it->second.cycleId) p = Progress{it->second.cycleId, 0, std::nullopt};
+  const std::vector<protocol::RobotReply> all = replies(it->second, s.policy);
+  if (p.next >= all.size()) return false;
+  p.last = all[p.next++];
+  reply(*p.last);
+  return true;
+}
+
 void ResultStore::onCycleStarted(std::uint32_t cycleId, int /*jobId*/) { running_ = cycleId; }
 
 void ResultStore::onResult(const CycleResult& r) {
   if (running_ == r.cycleId) running_.reset();
   latest_[r.jobId] = r;
-  const protocol::RobotReply reply = toReply(r);
+  // A result wakes every request waiting for its job, oldest first: each takes its robot's
+  // next part; when one robot has more waiting connections than parts, the extra ones get
+  // the robot's last part again (a waiting request is never left to time out while a
+  // result it asked for exists).
   for (auto it = waiters_.begin(); it != waiters_.end();) {
     Waiter& w = *it->second;
-    if (w.job == r.jobId) {
-      delivered_[w.robot] = r.cycleId;
-      answer(w, reply);
-      it = waiters_.erase(it);
-    } else {
+    if (w.job != r.jobId || w.done) {
       ++it;
+      continue;
     }
+    bool served = false;
+    serveNext(w.robot, w.job, [&](const protocol::RobotReply& reply) {
+      served = true;
+      answer(w, reply);
+    });
+    if (!served) {
+      const Progress& p = state(w.robot).progress[w.job];
+      if (p.last) answer(w, *p.last);
+    }
+    it = waiters_.erase(it);
   }
 }
 
-void ResultStore::handleGet(const std::string& robot, const protocol::RobotRequest& req, protocol::ReplyFn reply,
-                            int deadlineMs) {
-  if (!knownJobs_.count(req.job)) {
+void ResultStore::handle(const std::string& robot, const protocol::RobotRequest& req, protocol::ReplyFn reply) {
+  RobotState& s = state(robot);
+  const int job = req.job != 0 ? req.job : s.currentJob;
+  if (!knownJobs_.count(job)) {
     protocol::RobotReply r;
     r.status = Status::JobNotFound;
     reply(r);
     return;
   }
-  auto it = latest_.find(req.job);
-  if (it != latest_.end()) {
-    auto d = delivered_.find(robot);
-    const bool fresh = d == delivered_.end() || d->second != it->second.cycleId;
-    if (fresh || req.last) {
-      delivered_[robot] = it->second.cycleId;
-      reply(toReply(it->second));
+
+  if (req.command == protocol::Command::Job) {
+    s.currentJob = job;
+    reply(protocol::RobotReply{});  // 0 OK, cycle 0, zero pose
+    return;
+  }
+
+  if (req.last) {
+    auto it = latest_.find(job);
+    if (it != latest_.end()) {
+      Progress& p = s.progress[job];
+      if (p.cycleId == it->second.cycleId && p.last) {
+        reply(*p.last);
+        return;
+      }
+      if (serveNext(robot, job, reply)) return;
+    } else if (!running_) {
+      protocol::RobotReply r;
+      r.status = Status::NoNewTrigger;
+      reply(r);
       return;
     }
-  } else if (req.last && !running_) {
-    protocol::RobotReply r;
-    r.status = Status::NoNewTrigger;
-    reply(r);
+  } else if (serveNext(robot, job, reply)) {
     return;
   }
 
   // Wait for the next result of this job, at most until the robot's deadline.
   auto w = std::make_shared<Waiter>(io_);
   w->robot = robot;
-  w->job = req.job;
+  w->job = job;
   w->reply = std::move(reply);
   const std::uint64_t id = nextWaiter_++;
   waiters_[id] = w;
-  w->timer.expires_after(std::chrono::milliseconds(deadlineMs));
+  w->timer.expires_after(std::chrono::milliseconds(s.policy.replyDeadlineMs));
   w->timer.async_wait([this, id, w](const boost::system::error_code& ec) {
     if (ec || w->done) return;
     protocol::RobotReply r;

@@ -1,7 +1,21 @@
-// What robots get when they send GET,<job> (PROTOCOLS.md): a fresh result is delivered once
-// per robot (again only with GET,<job>,LAST); while a cycle is running or until one
-// arrives the request waits, up to the robot's reply deadline, then gets
-// 2 RESULT_NOT_READY (a cycle is running) or 3 NO_NEW_TRIGGER (nothing triggered).
+// What robots get when they ask (PROTOCOLS.md, "GET semantics"):
+//  - GET,<job> (or GET = the robot's current job): the next part of the latest result of
+//    that job not yet delivered to this robot. Parts of one image are served one per
+//    request in the robot's PartOrder (paper 002's sorting strategies); each part goes to
+//    each robot once (per robot name, so a reconnect does not repeat it).
+//  - When nothing undelivered exists the request waits for the next result of that job,
+//    up to the robot's reply deadline, then gets 2 RESULT_NOT_READY (a cycle is running) or
+//    3 NO_NEW_TRIGGER (nothing triggered). A result answers every request waiting for it:
+//    when one robot has more waiting connections than parts, the extra ones get its last
+//    part again.
+//  - A result without parts (or none with the robot's label) is delivered once as
+//    1 NO_PART_FOUND; an error result once with its status.
+//  - GET,<job>,LAST: the reply this robot last got from the latest result again (the first
+//    part in its order if it got none yet); 3 at once when the job never produced a result
+//    and no cycle is running.
+//  - JOB,<n>: the robot's current job becomes n (0 OK, or -7 for an unknown job), kept
+//    across reconnects until the daemon restarts.
+// Unknown job anywhere: -7 JOB_NOT_FOUND.
 // Lives on the I/O thread: every method must be called there (post from elsewhere).
 #pragma once
 
@@ -11,7 +25,9 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <vector>
 
+#include "config/cell_config.hpp"
 #include "core/cycle.hpp"
 #include "protocol/robot_server.hpp"
 
@@ -21,28 +37,59 @@ class io_context;
 
 namespace vgr::daemon {
 
+using PartOrder = config::PartOrder;
+
+struct RobotPolicy {
+  int job = 0;                // default job for "GET"; 0 = the smallest known job
+  int replyDeadlineMs = 1500; // ms, > 0: a waiting GET is answered within this
+  PartOrder order = PartOrder::BestScore;
+  int label = 0;              // LabelOnly: the label served
+};
+
 class ResultStore {
  public:
-  explicit ResultStore(boost::asio::io_context& io, std::set<int> knownJobs);
+  ResultStore(boost::asio::io_context& io, std::set<int> knownJobs);
   ~ResultStore();
+  ResultStore(const ResultStore&) = delete;
+  ResultStore& operator=(const ResultStore&) = delete;
+
+  // Registers a robot (by endpoint name). A robot never registered gets the default policy.
+  void addRobot(const std::string& robot, RobotPolicy policy);
 
   void onCycleStarted(std::uint32_t cycleId, int jobId);
   void onResult(const CycleResult& result);
-  // deadlineMs: the robot's reply deadline; a reply is always sent within it.
-  void handleGet(const std::string& robot, const protocol::RobotRequest& req, protocol::ReplyFn reply, int deadlineMs);
+  // Answers GET and JOB requests (the RequestHandler of every RobotServer).
+  void handle(const std::string& robot, const protocol::RobotRequest& req, protocol::ReplyFn reply);
 
-  static protocol::RobotReply toReply(const CycleResult& r);
+  // The replies one result turns into for a policy, in serving order (at least one).
+  static std::vector<protocol::RobotReply> replies(const CycleResult& r, const RobotPolicy& policy);
+  // The robot's current job (for tests and logs).
+  int currentJob(const std::string& robot) const;
 
  private:
   struct Waiter;
+  struct Progress {
+    std::uint32_t cycleId = 0;  // the result the robot is being served from
+    std::size_t next = 0;       // index of the next reply in replies(result, policy)
+    std::optional<protocol::RobotReply> last;  // what the robot got last from it
+  };
+  struct RobotState {
+    RobotPolicy policy;
+    int currentJob = 0;
+    std::map<int, Progress> progress;  // per job
+  };
+
+  RobotState& state(const std::string& robot);
+  // Serves the next undelivered reply of `job` to `robot`; false when there is none.
+  bool serveNext(const std::string& robot, int job, const protocol::ReplyFn& reply);
   void answer(Waiter& w, const protocol::RobotReply& reply);
 
   boost::asio::io_context& io_;
   std::set<int> knownJobs_;
-  std::map<int, CycleResult> latest_;                       // per job
-  std::map<std::string, std::uint32_t> delivered_;          // robot -> last cycle id delivered
-  std::optional<std::uint32_t> running_;                    // cycle in progress
-  std::map<std::uint64_t, std::shared_ptr<Waiter>> waiters_;
+  std::map<int, CycleResult> latest_;  // per job
+  std::map<std::string, RobotState> robots_;
+  std::optional<std::uint32_t> running_;  // cycle in progress
+  std::map<std::uint64_t, std::shared_ptr<Waiter>> waiters_;  // by arrival order
   std::uint64_t nextWaiter_ = 1;
 };
 

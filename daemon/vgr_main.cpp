@@ -1,6 +1,8 @@
 // vgr: the offline tool. Subcommands:
 //   vgr demo [--cycles N]     run the simulated cell end to end (docs/demo.md)
 //   vgr check --config FILE   validate a cell config
+//   vgr cameras [--json]      list the GigE Vision cameras on the network (docs/cameras.md)
+//   vgr grab --camera ID ...  trigger N frames, report errors and latency (docs/cameras.md)
 #include <cstdio>
 #include <string>
 
@@ -8,6 +10,7 @@
 
 #include "config/cell_config.hpp"
 #include "daemon/demo.hpp"
+#include "daemon/grab.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"vgr: vision-guided robotics tool"};
@@ -27,7 +30,28 @@ int main(int argc, char** argv) {
   auto* checkCmd = app.add_subcommand("check", "validate a cell config; prints file:line and key on error");
   checkCmd->add_option("--config", checkPath, "cell config")->required();
 
+  bool camerasJson = false;
+  auto* camerasCmd = app.add_subcommand("cameras", "list the cameras discovery finds (serial, model, address)");
+  camerasCmd->add_flag("--json", camerasJson, "one JSON array");
+
+  vgr::daemon::GrabOptions grab;
+  auto* grabCmd = app.add_subcommand("grab", "trigger N frames; report frames, typed errors and trigger->frame latency");
+  grabCmd->add_option("--camera", grab.camera, "IPv4 address, serial number or DeviceUserID");
+  grabCmd->add_option("--config", grab.configPath, "cell config whose camera section gives the features");
+  grabCmd->add_option("--count", grab.count, "number of triggers")->check(CLI::Range(1, 10000000));
+  grabCmd->add_option("--trigger", grab.trigger, "software, hardware or free_run (default: the config's, else software)");
+  grabCmd->add_option("--pixel-format", grab.pixelFormat, "Mono8, Mono10, Mono12, Mono16, BayerRG8, ...");
+  grabCmd->add_option("--packet-size", grab.packetSize, "GigE packet size in bytes (0 negotiates)")->check(CLI::Range(0, 65000));
+  grabCmd->add_option("--retries", grab.retries, "re-triggers after a lost frame within the deadline")->check(CLI::Range(0, 10));
+  grabCmd->add_option("--timeout-ms", grab.timeoutMs, "trigger -> frame timeout per attempt")->check(CLI::Range(50, 60000));
+  grabCmd->add_option("--deadline-ms", grab.deadlineMs, "trigger -> frame deadline incl. re-triggers (default: cycle_deadline_ms)")->check(CLI::Range(50, 600000));
+  grabCmd->add_option("--interval-ms", grab.intervalMs, "pause between triggers")->check(CLI::Range(0, 60000));
+  grabCmd->add_flag("--json", grab.json, "JSON output; the last line is {\"frames\",\"ok\",\"errors\",\"p50_ms\",\"p99_ms\"}");
+
   CLI11_PARSE(app, argc, argv);
+
+  if (*camerasCmd) return vgr::daemon::runCameras(camerasJson);
+  if (*grabCmd) return vgr::daemon::runGrab(grab);
 
   if (*demoCmd) return vgr::daemon::runDemo(demo);
   if (*checkCmd) {

@@ -18,12 +18,17 @@
 #include "daemon/journal.hpp"
 #include "daemon/result_store.hpp"
 #include "drivers/camera.hpp"
+#include "protocol/modbus_client_trigger.hpp"
 #include "protocol/modbus_server.hpp"
 #include "protocol/robot_server.hpp"
 
 namespace vgr::daemon {
 
 namespace asio = boost::asio;
+
+// Modbus result deadline = cell.cycle_deadline_ms + this (ms): the daemon's own deadline
+// answers first; this only catches a hung cycle thread.
+constexpr int kModbusDeadlineSlackMs = 100;
 
 struct VgrdApp::Impl {
   config::CellConfig cfg;
@@ -37,6 +42,7 @@ struct VgrdApp::Impl {
   std::unique_ptr<CycleRunner> cycles;
   std::unique_ptr<ResultStore> results;
   std::unique_ptr<protocol::ModbusServer> modbus;
+  std::unique_ptr<protocol::ModbusClientTrigger> modbusClient;  // modbus.client.enabled
   std::vector<std::unique_ptr<protocol::RobotServer>> robots;
   bool notifiedReady = false;
   std::uint64_t watchdogUsec = 0;
@@ -46,7 +52,7 @@ struct VgrdApp::Impl {
   void publish(const CycleResult& r) {
     // Cycle thread. PLC first (one lock inside), then robots (posted to the I/O thread),
     // then the journal (disk) last.
-    if (modbus) {
+    if (modbus || modbusClient) {
       protocol::ModbusResult m;
       m.cycleId = r.cycleId;
       m.status = r.status;
@@ -64,7 +70,8 @@ struct VgrdApp::Impl {
         m.r3 = e.rz + 0.0;
         m.score = p.score;
       }
-      modbus->publishResult(m);
+      if (modbus) modbus->publishResult(m);
+      if (modbusClient) modbusClient->publishResult(m);
     }
     asio::post(io, [this, r] { results->onResult(r); });
     journal.append(r, "modbus");
@@ -114,6 +121,7 @@ VgrdApp::VgrdApp(config::CellConfig config) : impl_(std::make_unique<Impl>(std::
 VgrdApp::~VgrdApp() {
   // Order: stop producers of work before what they feed.
   if (impl_->modbus) impl_->modbus->stop();
+  if (impl_->modbusClient) impl_->modbusClient->stop();
   if (impl_->cycles) impl_->cycles->stop();
   if (impl_->camera) impl_->camera->stop();
   for (auto& r : impl_->robots) r->stop();
@@ -139,13 +147,29 @@ Result<void> VgrdApp::start() {
   for (const auto& rc : s.cfg.robots) {
     protocol::RobotEndpoint ep;
     ep.name = rc.name;
-    ep.dialect = rc.dialect == config::Dialect::Ur ? protocol::Dialect::Ur : protocol::Dialect::Abb;
+    const auto dialect = protocol::parseDialect(config::dialectName(rc.dialect));
+    if (!dialect) return fail(Status::Internal, "robot '" + rc.name + "': unknown dialect");
+    ep.dialect = *dialect;
     ep.bind = rc.bind;
     ep.port = rc.port;
-    const int deadline = rc.replyDeadlineMs;
+    ep.maxClients = static_cast<std::size_t>(rc.maxClients);
+    ep.allowedClients = rc.allowedClients;
+    ep.strict.command = rc.strict.command;
+    ep.strict.ready = rc.strict.ready;
+    ep.strict.done = rc.strict.done;
+    ep.strict.lineEnd = rc.strict.lineEnd;
+    ep.stepTimeoutMs = rc.strict.stepTimeoutMs;
+
+    RobotPolicy policy;
+    policy.job = rc.job != 0 ? rc.job : (s.cfg.jobs.empty() ? 0 : s.cfg.jobs.front().id);  // like Modbus JOB_ID 0
+    policy.replyDeadlineMs = rc.replyDeadlineMs;
+    policy.order = rc.partOrder;
+    policy.label = rc.label;
+    s.results->addRobot(rc.name, policy);
+
     auto server = std::make_unique<protocol::RobotServer>(
-        s.io, ep, [&s, deadline](const std::string& robot, const protocol::RobotRequest& req, protocol::ReplyFn reply) {
-          s.results->handleGet(robot, req, std::move(reply), deadline);
+        s.io, ep, [&s](const std::string& robot, const protocol::RobotRequest& req, protocol::ReplyFn reply) {
+          s.results->handle(robot, req, std::move(reply));
         });
     if (auto r = server->start(); !r) return r;
     s.robots.push_back(std::move(server));
@@ -157,10 +181,36 @@ Result<void> VgrdApp::start() {
     mo.port = s.cfg.modbus.port;
     mo.floatOrder = s.cfg.modbus.floatWordOrder == config::WordOrder::HighWordFirst ? protocol::WordOrder::HighWordFirst
                                                                                      : protocol::WordOrder::LowWordFirst;
+    mo.maxClients = s.cfg.modbus.maxClients;
+    mo.requireTriggerEnable = s.cfg.modbus.requireTriggerEnable;
+    // Backstop behind the cycle deadline: the PLC is answered even if the cycle thread hangs.
+    mo.resultDeadline = std::chrono::milliseconds(s.cfg.cycleDeadlineMs + kModbusDeadlineSlackMs);
     s.modbus = std::make_unique<protocol::ModbusServer>(
         mo, [&s](int jobId) { return s.cycles->submit(jobId, TriggerSource::Modbus); });
     if (auto r = s.modbus->start(); !r) return r;
     s.modbus->setReady(true);
+  }
+  if (s.cfg.modbus.client.enabled) {
+    const auto& c = s.cfg.modbus.client;
+    protocol::ModbusClientOptions co;
+    co.host = c.host;
+    co.port = c.port;
+    co.unitId = c.unitId;
+    co.input = c.trigger == config::TriggerInputKind::Coil ? protocol::ModbusClientOptions::Input::Coil
+                                                            : protocol::ModbusClientOptions::Input::DiscreteInput;
+    co.inputAddress = static_cast<std::uint16_t>(c.triggerAddress);
+    co.statusAddress = static_cast<std::uint16_t>(c.statusAddress);
+    co.poll = std::chrono::milliseconds(c.pollMs);
+    co.debounce = std::chrono::milliseconds(c.debounceMs);
+    co.reconnect = std::chrono::milliseconds(c.reconnectMs);
+    co.floatOrder = s.cfg.modbus.floatWordOrder == config::WordOrder::HighWordFirst ? protocol::WordOrder::HighWordFirst
+                                                                                     : protocol::WordOrder::LowWordFirst;
+    co.jobId = c.job;
+    co.resultDeadline = std::chrono::milliseconds(s.cfg.cycleDeadlineMs + kModbusDeadlineSlackMs);
+    s.modbusClient = std::make_unique<protocol::ModbusClientTrigger>(
+        co, [&s](int jobId) { return s.cycles->submit(jobId, TriggerSource::Modbus); });
+    if (auto r = s.modbusClient->start(); !r) return r;
+    s.modbusClient->setReady(true);
   }
 
   s.camera->start();
@@ -184,6 +234,7 @@ int VgrdApp::run() {
   });
   s.io.run();
   if (s.modbus) s.modbus->setReady(false);
+  if (s.modbusClient) s.modbusClient->setReady(false);
   s.logStats();
   return 0;
 }

@@ -3,6 +3,7 @@
 #include "config/cell_config.hpp"
 #include "drivers/aravis_camera.hpp"
 #include "drivers/camera.hpp"
+#include "drivers/replay_camera.hpp"
 
 namespace vgr::drivers {
 namespace {
@@ -15,6 +16,7 @@ struct CameraDriver {
 // Every camera driver, by the name the cell config uses.
 constexpr CameraDriver kCameraDrivers[] = {
     {"aravis", &makeAravisCamera},
+    {"replay", &makeReplayCamera},
 };
 
 }  // namespace
@@ -24,7 +26,10 @@ const char* frameStatusName(FrameStatus s) {
     case FrameStatus::Ok: return "ok";
     case FrameStatus::Timeout: return "timeout";
     case FrameStatus::Incomplete: return "incomplete";
+    case FrameStatus::Underrun: return "underrun";
     case FrameStatus::Disconnected: return "disconnected";
+    case FrameStatus::IllegalState: return "illegal_state";
+    case FrameStatus::EndOfStream: return "end_of_stream";
     case FrameStatus::Failed: return "failed";
   }
   return "failed";

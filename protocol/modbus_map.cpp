@@ -1,5 +1,6 @@
 #include "protocol/modbus_map.hpp"
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 
@@ -62,7 +63,12 @@ void ModbusMap::setReady(bool ready) { setStatusBits(kStatusReady, ready); }
 
 void ModbusMap::tick() { setStatusBits(kStatusHeartbeat, (status() & kStatusHeartbeat) == 0); }
 
-void ModbusMap::handleTriggerRequest(const TriggerFn& onTrigger, bool levelMode, HandshakeEvents& ev) {
+void ModbusMap::handleTriggerRequest(const TriggerFn& onTrigger, bool levelMode, bool enabled,
+                                     Clock::time_point now, HandshakeEvents& ev) {
+  if (!enabled) {
+    ev.ignoredNotEnabled = true;
+    return;
+  }
   if (busy()) {
     ev.overrun = true;
     setStatusBits(kStatusOverrun, true);
@@ -86,7 +92,7 @@ void ModbusMap::handleTriggerRequest(const TriggerFn& onTrigger, bool levelMode,
     refused.status = Status::BusyOverrun;
     refused.jobId = jobId;
     refused.cycleId = input_[kResultId];  // RESULT_ID unchanged: no cycle was started
-    publishResult(refused);
+    write(refused);
     return;
   }
   ev.triggerAccepted = true;
@@ -95,9 +101,11 @@ void ModbusMap::handleTriggerRequest(const TriggerFn& onTrigger, bool levelMode,
   set(kCurrentJob, toInt16Register(jobId));
   setStatusBits(kStatusBusy | kStatusTriggerAck, true);
   counterModeAck_ = !levelMode;
+  inFlight_ = cycleId;
+  inFlightSince_ = now;
 }
 
-HandshakeEvents ModbusMap::onHoldingWritten(const TriggerFn& onTrigger) {
+HandshakeEvents ModbusMap::onHoldingWritten(const TriggerFn& onTrigger, Clock::time_point now) {
   HandshakeEvents ev;
   const std::uint16_t control = holding_[kControl];
   const auto rising = static_cast<std::uint16_t>(control & ~lastControl_);
@@ -120,15 +128,41 @@ HandshakeEvents ModbusMap::onHoldingWritten(const TriggerFn& onTrigger) {
   if ((falling & kControlTrigger) != 0 && !counterModeAck_) {
     setStatusBits(kStatusTriggerAck, false);
   }
+  const bool enabled = !requireTriggerEnable_ || (control & kControlTriggerEnable) != 0;
   if ((rising & kControlTrigger) != 0) {
-    handleTriggerRequest(onTrigger, true, ev);
+    handleTriggerRequest(onTrigger, true, enabled, now, ev);
   } else if (counterTrigger) {
-    handleTriggerRequest(onTrigger, false, ev);
+    handleTriggerRequest(onTrigger, false, enabled, now, ev);
   }
   return ev;
 }
 
-void ModbusMap::publishResult(const ModbusResult& r) {
+bool ModbusMap::publishResult(const ModbusResult& r) {
+  if (r.cycleId != 0 && std::find(expired_.begin(), expired_.end(), r.cycleId) != expired_.end()) return false;
+  write(r);
+  return true;
+}
+
+std::optional<ModbusMap::Clock::time_point> ModbusMap::busyDeadline() const {
+  if (resultDeadline_.count() <= 0 || !busy() || inFlight_ == 0) return std::nullopt;
+  return inFlightSince_ + resultDeadline_;
+}
+
+std::uint32_t ModbusMap::expireOverdue(Clock::time_point now) {
+  const auto due = busyDeadline();
+  if (!due || now < *due) return 0;
+  const std::uint32_t id = inFlight_;
+  ModbusResult r;
+  r.cycleId = id;
+  r.status = Status::ProcessingTimeout;
+  r.jobId = asInt16(input_[kCurrentJob]);
+  write(r);
+  expired_[expiredNext_] = id;
+  expiredNext_ = (expiredNext_ + 1) % expired_.size();
+  return id;
+}
+
+void ModbusMap::write(const ModbusResult& r) {
   const int code = statusCode(r.status);
   set(kNumFound, toInt16Register(r.numFound));
   set(kCurrentJob, toInt16Register(r.jobId));
@@ -157,6 +191,7 @@ void ModbusMap::publishResult(const ModbusResult& r) {
     counterModeAck_ = false;
     setStatusBits(kStatusTriggerAck, false);
   }
+  inFlight_ = 0;
 }
 
 }  // namespace vgr::protocol

@@ -14,8 +14,17 @@
 //   RESULT_ID, then RESULT_VALID, and clears BUSY -> PLC raises RESULT_ACK -> map clears
 //   RESULT_VALID and PART_FOUND. Dropping RESULT_ACK does nothing.
 // Other rules:
-//   - TRIGGER_ENABLE (CONTROL b3) is NOT required in this version: triggers are accepted
-//     whether or not it is set. It is reserved for a later "enable" mode.
+//   - TRIGGER_ENABLE (CONTROL b3): with setRequireTriggerEnable(true) (config key
+//     modbus.require_trigger_enable) a trigger edge, level or counter, is accepted only
+//     while b3 is set in the same or an earlier write; without it the edge is ignored like
+//     a trigger while not READY (no ACK, no cycle, HandshakeEvents::ignoredNotEnabled).
+//     Raising b3 while TRIGGER is already high does not trigger: an edge is needed.
+//     Off (the default), b3 is ignored.
+//   - Result deadline (setResultDeadline(), cell.cycle_deadline_ms + slack in vgrd): a
+//     backstop behind the daemon's own cycle deadline. When BUSY has lasted longer than
+//     it, expireOverdue() publishes the cycle in flight as -5 PROCESSING_TIMEOUT (RESULT_ID
+//     = its id) so the PLC never waits blindly, even on a hung cycle thread; the late real
+//     result of that cycle is then dropped by publishResult() (it returns false).
 //   - A rising TRIGGER while BUSY is not accepted: it sets OVERRUN and ERROR_CODE = -3
 //     (BUSY_OVERRUN); the cycle in flight continues.
 //   - A rising TRIGGER while not READY is ignored (no ACK): the PLC must wait for READY.
@@ -33,9 +42,11 @@
 #pragma once
 
 #include <array>
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <span>
 
 #include "core/status.hpp"
@@ -99,7 +110,7 @@ inline constexpr std::uint16_t kStatusOverrun = 1u << 7;
 inline constexpr std::uint16_t kControlTrigger = 1u << 0;
 inline constexpr std::uint16_t kControlResultAck = 1u << 1;
 inline constexpr std::uint16_t kControlClearError = 1u << 2;
-inline constexpr std::uint16_t kControlTriggerEnable = 1u << 3;  // reserved, not required
+inline constexpr std::uint16_t kControlTriggerEnable = 1u << 3;  // required with setRequireTriggerEnable(true)
 
 // Float32 as two registers in the given word order (bytes packed by hand: libmodbus
 // 3.1.6's modbus_set_float_abcd swaps bytes). 123.456f, HighWordFirst -> {0x42F6, 0xE979}.
@@ -128,6 +139,7 @@ struct HandshakeEvents {
   bool ignoredNotReady = false;    // rising trigger while not READY
   bool resultAcked = false;        // rising RESULT_ACK
   bool errorCleared = false;       // rising CLEAR_ERROR
+  bool ignoredNotEnabled = false;  // trigger edge without TRIGGER_ENABLE (when required)
   int jobId = 0;                   // job of the accepted/refused trigger
   std::uint32_t cycleId = 0;       // cycle id of the accepted trigger
 };
@@ -139,7 +151,16 @@ class ModbusMap {
   // back into this map.
   using TriggerFn = std::function<std::uint32_t(int jobId)>;
 
+  using Clock = std::chrono::steady_clock;
+
   explicit ModbusMap(WordOrder floatOrder = WordOrder::HighWordFirst);
+
+  // Triggers need CONTROL b3 TRIGGER_ENABLE (see the header comment). Default false.
+  void setRequireTriggerEnable(bool on) { requireTriggerEnable_ = on; }
+  bool requireTriggerEnable() const { return requireTriggerEnable_; }
+  // Longest BUSY before expireOverdue() ends the cycle with -5; zero = never (default).
+  void setResultDeadline(std::chrono::milliseconds d) { resultDeadline_ = d; }
+  std::chrono::milliseconds resultDeadline() const { return resultDeadline_; }
 
   // The register tables, kRegisterCount words each; the server hands them to libmodbus.
   // Clients write holding registers through these, then the owner calls onHoldingWritten().
@@ -150,16 +171,25 @@ class ModbusMap {
   std::uint16_t status() const { return input_[modbus::kStatus]; }
 
   // Runs the handshake after a client wrote holding registers: edge detection on CONTROL
-  // and TRIGGER_ID against the values seen by the previous call.
-  HandshakeEvents onHoldingWritten(const TriggerFn& onTrigger);
+  // and TRIGGER_ID against the values seen by the previous call. `now` stamps an accepted
+  // trigger for the result deadline.
+  HandshakeEvents onHoldingWritten(const TriggerFn& onTrigger, Clock::time_point now = Clock::now());
 
   void setReady(bool ready);
   bool ready() const { return (status() & modbus::kStatusReady) != 0; }
   bool busy() const { return (status() & modbus::kStatusBusy) != 0; }
 
   // Writes the result registers, then RESULT_ID, then RESULT_VALID; clears BUSY; ERROR and
-  // ERROR_CODE when r.status < 0; PART_FOUND when r.status == Ok.
-  void publishResult(const ModbusResult& r);
+  // ERROR_CODE when r.status < 0; PART_FOUND when r.status == Ok. Returns false (and
+  // changes nothing) for the late result of a cycle expireOverdue() already ended.
+  bool publishResult(const ModbusResult& r);
+
+  // When BUSY for longer than the result deadline at `now`: publishes the cycle in flight
+  // as PROCESSING_TIMEOUT and returns its id; else 0. The server calls it from its loop.
+  std::uint32_t expireOverdue(Clock::time_point now);
+  // When the cycle in flight must be ended by expireOverdue(); nullopt when not BUSY or
+  // no deadline is set.
+  std::optional<Clock::time_point> busyDeadline() const;
 
   // Toggles HEARTBEAT; the server calls it once a second.
   void tick();
@@ -170,7 +200,9 @@ class ModbusMap {
   void set(std::uint16_t address, std::uint16_t value);  // both tables
   void setStatusBits(std::uint16_t bits, bool on);
   void writeFloat(std::uint16_t address, double value);
-  void handleTriggerRequest(const TriggerFn& onTrigger, bool levelMode, HandshakeEvents& ev);
+  void handleTriggerRequest(const TriggerFn& onTrigger, bool levelMode, bool enabled, Clock::time_point now,
+                            HandshakeEvents& ev);
+  void write(const ModbusResult& r);  // publishResult() without the expired check
 
   WordOrder floatOrder_;
   std::array<std::uint16_t, modbus::kRegisterCount> holding_{};
@@ -178,6 +210,12 @@ class ModbusMap {
   std::uint16_t lastControl_ = 0;    // CONTROL as of the previous onHoldingWritten()
   std::uint16_t lastTriggerId_ = 0;  // TRIGGER_ID as of the previous onHoldingWritten()
   bool counterModeAck_ = false;      // TRIGGER_ACK came from a counter-mode trigger
+  bool requireTriggerEnable_ = false;
+  std::chrono::milliseconds resultDeadline_{0};
+  std::uint32_t inFlight_ = 0;        // cycle id accepted and not yet published; 0 = none
+  Clock::time_point inFlightSince_{};
+  std::array<std::uint32_t, 8> expired_{};  // cycles ended by expireOverdue(), ring
+  std::size_t expiredNext_ = 0;
 };
 
 }  // namespace vgr::protocol

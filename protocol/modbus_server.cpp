@@ -23,13 +23,14 @@
 #include <vector>
 
 #include "core/log.hpp"
+#include "protocol/modbus_request.hpp"
 
 namespace vgr::protocol {
 
 namespace {
 
 constexpr auto kHeartbeatPeriod = std::chrono::seconds(1);
-constexpr std::uint32_t kByteTimeoutUs = 200'000;  // max gap inside one request frame
+constexpr auto kByteTimeout = std::chrono::milliseconds(200);  // max gap inside one request frame
 constexpr int kSendTimeoutMs = 200;                // a client that does not read is dropped
 
 std::string errnoText(int err) { return std::strerror(err); }
@@ -39,8 +40,6 @@ std::string peerName(const sockaddr_in& addr) {
   inet_ntop(AF_INET, &addr.sin_addr, ip.data(), ip.size());
   return std::string(ip.data()) + ":" + std::to_string(ntohs(addr.sin_port));
 }
-
-std::uint16_t be16(const std::uint8_t* p) { return static_cast<std::uint16_t>((p[0] << 8) | p[1]); }
 
 // Set while a TriggerHandler runs on this thread, so re-entrant calls from the handler do
 // not dead-lock on the map mutex.
@@ -54,7 +53,10 @@ struct ModbusServer::Impl {
     std::string peer;
   };
 
-  Impl(ModbusOptions o, TriggerHandler h) : options(std::move(o)), onTrigger(std::move(h)), map(options.floatOrder) {}
+  Impl(ModbusOptions o, TriggerHandler h) : options(std::move(o)), onTrigger(std::move(h)), map(options.floatOrder) {
+    map.setRequireTriggerEnable(options.requireTriggerEnable);
+    map.setResultDeadline(options.resultDeadline);
+  }
 
   ModbusOptions options;
   TriggerHandler onTrigger;
@@ -64,7 +66,7 @@ struct ModbusServer::Impl {
   std::vector<ModbusResult> deferred;  // publishResult() calls made from inside onTrigger
 
   // Owned by the Modbus thread between start() and stop().
-  modbus_t* ctx = nullptr;
+  std::unique_ptr<ModbusRequestHandler> handler_;
   int listenFd = -1;
   std::array<int, 2> wakePipe{-1, -1};
   std::vector<Client> clients;
@@ -108,16 +110,12 @@ Result<void> ModbusServer::Impl::start() {
   getsockname(listenFd, reinterpret_cast<sockaddr*>(&bound), &len);
   boundPort = ntohs(bound.sin_port);
 
-  // The context only parses and answers requests on sockets we accepted ourselves.
-  ctx = modbus_new_tcp("127.0.0.1", boundPort);
-  if (ctx == nullptr || pipe2(wakePipe.data(), O_CLOEXEC | O_NONBLOCK) != 0) {
+  handler_ = std::make_unique<ModbusRequestHandler>(kByteTimeout);
+  if (!handler_->valid() || pipe2(wakePipe.data(), O_CLOEXEC | O_NONBLOCK) != 0) {
     const int err = errno;
     releaseResources();
     return fail(Status::Internal, "modbus: cannot create server context for " + where + ": " + errnoText(err));
   }
-  modbus_set_byte_timeout(ctx, 0, kByteTimeoutUs);
-  modbus_set_indication_timeout(ctx, 0, kByteTimeoutUs);  // poll() said readable; never wait forever
-  modbus_set_error_recovery(ctx, MODBUS_ERROR_RECOVERY_NONE);
 
   thread = std::thread([this] { run(); });
   log::info("modbus", "listening on {}:{} (max {} clients, floats {})", options.bind, boundPort, options.maxClients,
@@ -137,11 +135,7 @@ void ModbusServer::Impl::stop() {
 void ModbusServer::Impl::releaseResources() {
   for (auto& c : clients) closeClient(c, "server stopping");
   clients.clear();
-  if (ctx != nullptr) {
-    modbus_set_socket(ctx, -1);
-    modbus_free(ctx);
-    ctx = nullptr;
-  }
+  handler_.reset();
   for (int& fd : wakePipe) {
     if (fd >= 0) ::close(fd);
     fd = -1;
@@ -202,76 +196,26 @@ std::uint32_t ModbusServer::Impl::callHandler(int jobId) {
 }
 
 bool ModbusServer::Impl::serveClient(Client& c) {
-  std::array<std::uint8_t, MODBUS_TCP_MAX_ADU_LENGTH> req{};
-  modbus_set_socket(ctx, c.fd);
-  const int rc = modbus_receive(ctx, req.data());
+  ModbusFrame req{};
+  const int rc = handler_->receive(c.fd, req);
   if (rc < 0) {
-    const int err = errno;
-    closeClient(c, err == ECONNRESET ? std::string("closed by peer") : "receive failed: " + std::string(modbus_strerror(err)));
+    closeClient(c, handler_->lastError());
     return false;
   }
   if (rc == 0) return true;  // request for another unit, ignored by libmodbus
 
-  // MBAP: transaction id (2), protocol id (2, must be 0), length (2, bytes that follow),
-  // unit id (1), then the PDU. libmodbus checks none of this on the server side.
-  const int header = modbus_get_header_length(ctx);
-  if (rc < header + 1 || be16(&req[2]) != 0 || be16(&req[4]) != rc - 6) {
-    closeClient(c, "malformed frame");
-    return false;
-  }
-  const std::uint8_t function = req[static_cast<std::size_t>(header)];
-  const std::uint8_t* pdu = &req[static_cast<std::size_t>(header)];
-  bool writes = false;
-  std::uint32_t address = 0, count = 0;
-  switch (function) {
-    case MODBUS_FC_WRITE_SINGLE_REGISTER:
-    case MODBUS_FC_MASK_WRITE_REGISTER:
-      writes = true;
-      address = be16(pdu + 1);
-      count = 1;
-      break;
-    case MODBUS_FC_WRITE_MULTIPLE_REGISTERS:
-      writes = true;
-      address = be16(pdu + 1);
-      count = be16(pdu + 3);
-      break;
-    case MODBUS_FC_WRITE_AND_READ_REGISTERS:
-      writes = true;
-      address = be16(pdu + 5);
-      count = be16(pdu + 7);
-      break;
-    default:
-      break;
-  }
-  if (writes && !modbus::isWritable(address, count)) {
-    if (modbus_reply_exception(ctx, req.data(), MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS) < 0) {
-      closeClient(c, "send failed: " + std::string(modbus_strerror(errno)));
-      return false;
-    }
-    return true;
-  }
-
   std::lock_guard lock(mutex);
-  auto holding = map.holdingRegisters();
-  auto input = map.inputRegisters();
-  modbus_mapping_t mapping{};
-  mapping.nb_registers = static_cast<int>(holding.size());
-  mapping.tab_registers = holding.data();
-  mapping.nb_input_registers = static_cast<int>(input.size());
-  mapping.tab_input_registers = input.data();
-  const int sent = modbus_reply(ctx, req.data(), rc, &mapping);
-  const int sendErr = errno;
-  if (writes) {
-    const HandshakeEvents ev = map.onHoldingWritten([this](int jobId) { return callHandler(jobId); });
-    for (const auto& r : deferred) map.publishResult(r);
-    deferred.clear();
-    if (ev.triggerAccepted) log::debug("modbus", "trigger accepted: job {} cycle {}", ev.jobId, ev.cycleId);
-    if (ev.triggerRefused) log::debug("modbus", "trigger refused by the daemon: job {}", ev.jobId);
-    if (ev.overrun) log::debug("modbus", "trigger while busy from {}: OVERRUN", c.peer);
-    if (ev.ignoredNotReady) log::debug("modbus", "trigger while not ready from {} ignored", c.peer);
-  }
-  if (sent < 0) {
-    closeClient(c, "send failed: " + std::string(modbus_strerror(sendErr)));
+  const auto out = handler_->handle(c.fd, req, rc, map, [this](int jobId) { return callHandler(jobId); });
+  for (const auto& r : deferred) map.publishResult(r);
+  deferred.clear();
+  const HandshakeEvents& ev = out.events;
+  if (ev.triggerAccepted) log::debug("modbus", "trigger accepted: job {} cycle {}", ev.jobId, ev.cycleId);
+  if (ev.triggerRefused) log::debug("modbus", "trigger refused by the daemon: job {}", ev.jobId);
+  if (ev.overrun) log::debug("modbus", "trigger while busy from {}: OVERRUN", c.peer);
+  if (ev.ignoredNotReady) log::debug("modbus", "trigger while not ready from {} ignored", c.peer);
+  if (ev.ignoredNotEnabled) log::debug("modbus", "trigger without TRIGGER_ENABLE from {} ignored", c.peer);
+  if (!out.keep) {
+    closeClient(c, out.dropReason);
     return false;
   }
   return true;
@@ -286,7 +230,12 @@ void ModbusServer::Impl::run() {
     fds.push_back({wakePipe[0], POLLIN, 0});
     fds.push_back({listenFd, POLLIN, 0});
     for (const auto& c : clients) fds.push_back({c.fd, POLLIN, 0});
-    const auto wait = std::chrono::ceil<std::chrono::milliseconds>(nextBeat - Clock::now());
+    auto wakeAt = nextBeat;
+    {
+      std::lock_guard lock(mutex);
+      if (const auto due = map.busyDeadline(); due && *due < wakeAt) wakeAt = *due;
+    }
+    const auto wait = std::chrono::ceil<std::chrono::milliseconds>(wakeAt - Clock::now());
     const int rc = ::poll(fds.data(), fds.size(), static_cast<int>(std::max<std::int64_t>(0, wait.count())));
     if (rc < 0 && errno != EINTR) {
       log::error("modbus", "poll failed: {}; server thread exits", errnoText(errno));
@@ -298,6 +247,13 @@ void ModbusServer::Impl::run() {
       map.tick();
       nextBeat += kHeartbeatPeriod;
       if (nextBeat < now) nextBeat = now + kHeartbeatPeriod;  // after a long stall
+    }
+    {
+      std::lock_guard lock(mutex);
+      if (const std::uint32_t expired = map.expireOverdue(now); expired != 0) {
+        log::warn("modbus", "cycle {} not published within {} ms: PLC answered with PROCESSING_TIMEOUT", expired,
+                  options.resultDeadline.count());
+      }
     }
     if (rc <= 0) continue;
     if ((fds[0].revents & POLLIN) != 0) return;  // stop()
@@ -334,7 +290,9 @@ void ModbusServer::publishResult(const ModbusResult& r) {
     return;
   }
   std::lock_guard lock(impl_->mutex);
-  impl_->map.publishResult(r);
+  if (!impl_->map.publishResult(r)) {
+    log::warn("modbus", "late result of cycle {} dropped: the PLC already got PROCESSING_TIMEOUT", r.cycleId);
+  }
 }
 
 std::uint16_t ModbusServer::port() const { return impl_->boundPort != 0 ? impl_->boundPort : impl_->options.port; }

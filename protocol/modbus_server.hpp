@@ -11,6 +11,7 @@
 // Writes outside HR 0..15 get exception 02 (illegal data address); any unit id is served.
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -27,6 +28,10 @@ struct ModbusOptions {
   std::uint16_t port = 1502;       // 0 = pick a free port (read it back with port())
   WordOrder floatOrder = WordOrder::HighWordFirst;
   int maxClients = 8;  // simultaneous PLC connections, [1, 64]
+  bool requireTriggerEnable = false;  // triggers need CONTROL b3 (ModbusMap::setRequireTriggerEnable)
+  // Backstop: BUSY longer than this ends the cycle with -5 PROCESSING_TIMEOUT at the PLC
+  // (ModbusMap::setResultDeadline); zero = off. vgrd: cell.cycle_deadline_ms + 100 ms.
+  std::chrono::milliseconds resultDeadline{0};
 };
 
 class ModbusServer {

@@ -1,14 +1,16 @@
 #include "protocol/robot_codec.hpp"
 
+#include <algorithm>
 #include <array>
 #include <charconv>
 #include <cmath>
 #include <system_error>
 
 namespace vgr::protocol {
+namespace binary {
+void appendInt32(std::string& out, std::int32_t v);
+}  // namespace binary
 namespace {
-
-constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
 
 bool isTerminator(char c) { return c == '#' || c == '\r' || c == '\n'; }
 bool isBlank(char c) { return c == ' ' || c == '\t'; }
@@ -93,6 +95,72 @@ std::string formatAbb(int status, std::uint32_t cycle, const Pose& p, bool zeroP
   return out;
 }
 
+// Fixed-width, sign-padded: '+' or '-', then |v| with `decimals` decimals, zero-padded on
+// the left to `intDigits` integer digits. A value that rounds to zero gets '+'. The caller
+// guarantees |v| fits (it is bounded by kMaxAbsPositionMm or 180 degrees).
+void appendSignPadded(std::string& out, double v, int intDigits, int decimals) {
+  std::array<char, 64> buf{};
+  const double mag = std::abs(v);
+  auto res = std::to_chars(buf.data(), buf.data() + buf.size(), mag, std::chars_format::fixed, decimals);
+  if (res.ec != std::errc{}) res = std::to_chars(buf.data(), buf.data() + buf.size(), 0.0, std::chars_format::fixed, decimals);
+  const std::string_view text(buf.data(), static_cast<std::size_t>(res.ptr - buf.data()));
+  const bool zero = text.find_first_not_of("0.") == std::string_view::npos;
+  out.push_back(v < 0 && !zero ? '-' : '+');
+  const std::size_t width = static_cast<std::size_t>(intDigits + 1 + decimals);
+  if (text.size() < width) out.append(width - text.size(), '0');
+  out.append(text);
+}
+
+// Integer field: optional sign ('+'/'-') and `digits` zero-padded digits.
+void appendIntPadded(std::string& out, long long v, int digits, bool withSign) {
+  if (withSign) out.push_back(v < 0 ? '-' : '+');
+  std::array<char, 24> buf{};
+  const auto res = std::to_chars(buf.data(), buf.data() + buf.size(), v < 0 ? -v : v);
+  const std::string_view text(buf.data(), static_cast<std::size_t>(res.ptr - buf.data()));
+  if (text.size() < static_cast<std::size_t>(digits)) out.append(static_cast<std::size_t>(digits) - text.size(), '0');
+  out.append(text);
+}
+
+constexpr long long kFanucMaxCycle = 9999999;  // 7 digits; cycle ids stay below 2^23
+
+std::string formatFanuc(int status, std::uint32_t cycle, const Pose& p, bool zeroPose) {
+  EulerZyxDeg e{};
+  if (!zeroPose) e = toEulerZyxDeg(p);
+  std::string out;
+  out.reserve(kFanucReplyChars);
+  appendIntPadded(out, status, 4, true);
+  out.push_back(',');
+  appendIntPadded(out, std::min<long long>(cycle, kFanucMaxCycle), 7, false);
+  const double pos[3] = {zeroPose ? 0.0 : p.x, zeroPose ? 0.0 : p.y, zeroPose ? 0.0 : p.z};
+  for (double v : pos) {
+    out.push_back(',');
+    appendSignPadded(out, v, 5, 3);
+  }
+  const double wpr[3] = {e.rx, e.ry, e.rz};  // W = rx, P = ry, R = rz
+  for (double v : wpr) {
+    out.push_back(',');
+    appendSignPadded(out, v, 3, 3);
+  }
+  out.append("\r\n");
+  return out;
+}
+
+std::int32_t scaled(double v) { return static_cast<std::int32_t>(std::llround(v * 1000.0)); }
+
+std::string formatBinary(int status, std::uint32_t cycle, const Pose& p, bool zeroPose) {
+  EulerZyxDeg e{};
+  if (!zeroPose) e = toEulerZyxDeg(p);
+  std::string out;
+  out.reserve(binary::kReplyBytes);
+  binary::appendInt32(out, static_cast<std::int32_t>(binary::kReplyMagic));
+  binary::appendInt32(out, static_cast<std::int32_t>(binary::kReplyBytes));
+  binary::appendInt32(out, status);
+  binary::appendInt32(out, static_cast<std::int32_t>(cycle & 0x7FFFFFFFu));
+  const double values[6] = {p.x, p.y, p.z, e.rx, e.ry, e.rz};
+  for (double v : values) binary::appendInt32(out, zeroPose ? 0 : scaled(v));
+  return out;
+}
+
 bool anyNonFinite(const double* v, std::size_t n) {
   for (std::size_t i = 0; i < n; ++i) {
     if (!std::isfinite(v[i])) return true;
@@ -105,6 +173,9 @@ bool anyNonFinite(const double* v, std::size_t n) {
 std::optional<Dialect> parseDialect(std::string_view text) {
   if (text == "ur") return Dialect::Ur;
   if (text == "abb") return Dialect::Abb;
+  if (text == "fanuc") return Dialect::Fanuc;
+  if (text == "binary") return Dialect::Binary;
+  if (text == "strict") return Dialect::Strict;
   return std::nullopt;
 }
 
@@ -114,6 +185,12 @@ std::string_view dialectName(Dialect dialect) {
       return "ur";
     case Dialect::Abb:
       return "abb";
+    case Dialect::Fanuc:
+      return "fanuc";
+    case Dialect::Binary:
+      return "binary";
+    case Dialect::Strict:
+      return "strict";
   }
   return "?";
 }
@@ -165,6 +242,22 @@ std::optional<Result<std::string>> RequestSplitter::next() {
 // ---------------------------------------------------------------------------------------
 // Requests
 
+namespace {
+
+// Job field: decimal, no sign, [kMinJob, kMaxJob].
+Result<int> parseJob(std::string_view jobText) {
+  if (jobText.empty()) return fail(Status::BadArgument, "missing job number");
+  int job = 0;
+  const auto [ptr, ec] = std::from_chars(jobText.data(), jobText.data() + jobText.size(), job);
+  if (ec != std::errc{} || ptr != jobText.data() + jobText.size() || jobText.front() == '-') {
+    return fail(Status::BadArgument, "job is not a number");
+  }
+  if (job < kMinJob || job > kMaxJob) return fail(Status::BadArgument, "job out of range [1, 32767]");
+  return job;
+}
+
+}  // namespace
+
 Result<RobotRequest> parseRequest(std::string_view line) {
   // Split on commas (at most 4 fields looked at; more is an error anyway).
   std::array<std::string_view, 4> fields{};
@@ -179,19 +272,22 @@ Result<RobotRequest> parseRequest(std::string_view line) {
     rest.remove_prefix(comma + 1);
   }
 
-  if (fields[0] != "GET") return fail(Status::UnknownCommand, "unknown command");
-  if (count < 2 || fields[1].empty()) return fail(Status::BadArgument, "missing job number");
-
-  int job = 0;
-  const std::string_view jobText = fields[1];
-  const auto [ptr, ec] = std::from_chars(jobText.data(), jobText.data() + jobText.size(), job);
-  if (ec != std::errc{} || ptr != jobText.data() + jobText.size() || jobText.front() == '-') {
-    return fail(Status::BadArgument, "job is not a number");
-  }
-  if (job < kMinJob || job > kMaxJob) return fail(Status::BadArgument, "job out of range [1, 32767]");
-
   RobotRequest req;
-  req.job = job;
+  if (fields[0] == "JOB") {
+    if (count < 2) return fail(Status::BadArgument, "missing job number");
+    if (count > 2) return fail(Status::BadArgument, "too many fields");
+    auto job = parseJob(fields[1]);
+    if (!job) return std::unexpected(job.error());
+    req.command = Command::Job;
+    req.job = *job;
+    return req;
+  }
+  if (fields[0] != "GET") return fail(Status::UnknownCommand, "unknown command");
+  if (count == 1) return req;  // "GET": the robot's current job
+
+  auto job = parseJob(fields[1]);
+  if (!job) return std::unexpected(job.error());
+  req.job = *job;
   if (count == 3) {
     if (fields[2] != "LAST") return fail(Status::BadArgument, "unknown option (expected LAST)");
     req.last = true;
@@ -199,6 +295,109 @@ Result<RobotRequest> parseRequest(std::string_view line) {
     return fail(Status::BadArgument, "too many fields");
   }
   return req;
+}
+
+// ---------------------------------------------------------------------------------------
+// Binary frames
+
+namespace binary {
+
+void appendInt32(std::string& out, std::int32_t v) {
+  const auto u = static_cast<std::uint32_t>(v);
+  out.push_back(static_cast<char>((u >> 24) & 0xFF));
+  out.push_back(static_cast<char>((u >> 16) & 0xFF));
+  out.push_back(static_cast<char>((u >> 8) & 0xFF));
+  out.push_back(static_cast<char>(u & 0xFF));
+}
+
+std::int32_t readInt32(std::string_view frame, std::size_t at) {
+  std::uint32_t u = 0;
+  for (std::size_t i = 0; i < 4; ++i) u = (u << 8) | static_cast<unsigned char>(frame[at + i]);
+  return static_cast<std::int32_t>(u);
+}
+
+std::string encodeRequest(std::int32_t command, std::int32_t job) {
+  std::string out;
+  out.reserve(kRequestBytes);
+  appendInt32(out, static_cast<std::int32_t>(kRequestMagic));
+  appendInt32(out, static_cast<std::int32_t>(kRequestBytes));
+  appendInt32(out, command);
+  appendInt32(out, job);
+  return out;
+}
+
+}  // namespace binary
+
+RequestDecoder::RequestDecoder(Dialect dialect) : dialect_(dialect) {}
+
+void RequestDecoder::append(std::string_view bytes) {
+  if (dialect_ != Dialect::Binary) {
+    text_.append(bytes);
+    return;
+  }
+  bin_.append(bytes);
+}
+
+std::optional<Result<RobotRequest>> RequestDecoder::next() {
+  if (dialect_ != Dialect::Binary) {
+    std::optional<Result<std::string>> line = text_.next();
+    if (!line) return std::nullopt;
+    if (!*line) return Result<RobotRequest>(std::unexpected(std::move(line->error())));
+    return parseRequest(**line);
+  }
+
+  std::string magic;
+  binary::appendInt32(magic, static_cast<std::int32_t>(binary::kRequestMagic));
+  // Garbage before a magic: drop it, report once per run.
+  const std::size_t at = bin_.find(magic);
+  if (at != 0) {
+    // Keep a tail that may be the start of a magic split across reads.
+    const std::size_t drop = at == std::string::npos ? (bin_.size() > 3 ? bin_.size() - 3 : 0) : at;
+    if (drop > 0) {
+      bin_.erase(0, drop);
+      if (!inGarbage_) {
+        inGarbage_ = true;
+        return Result<RobotRequest>(fail(Status::UnknownCommand, "binary request without the 'VGRQ' magic"));
+      }
+    }
+    if (at == std::string::npos) return std::nullopt;
+  }
+  if (bin_.size() < binary::kRequestBytes) return std::nullopt;
+  inGarbage_ = false;
+
+  const std::string_view frame(bin_.data(), binary::kRequestBytes);
+  const std::int32_t length = binary::readInt32(frame, 4);
+  const std::int32_t command = binary::readInt32(frame, 8);
+  const std::int32_t job = binary::readInt32(frame, 12);
+  if (length != static_cast<std::int32_t>(binary::kRequestBytes)) {
+    // The frame boundary is unknown: skip only the magic and look for the next one.
+    // One bad frame, one error: what follows up to the next magic is not reported again.
+    bin_.erase(0, 4);
+    inGarbage_ = true;
+    return Result<RobotRequest>(fail(Status::BadArgument, "binary request length is not 16"));
+  }
+  bin_.erase(0, binary::kRequestBytes);
+
+  RobotRequest req;
+  switch (command) {
+    case binary::kCmdGet:
+    case binary::kCmdGetLast:
+      req.command = Command::Get;
+      req.last = command == binary::kCmdGetLast;
+      if (job == 0) {
+        if (req.last) return Result<RobotRequest>(fail(Status::BadArgument, "GET LAST needs a job"));
+        return Result<RobotRequest>(req);
+      }
+      break;
+    case binary::kCmdJob:
+      req.command = Command::Job;
+      break;
+    default:
+      return Result<RobotRequest>(fail(Status::UnknownCommand, "unknown binary command"));
+  }
+  if (job < kMinJob || job > kMaxJob) return Result<RobotRequest>(fail(Status::BadArgument, "job out of range [1, 32767]"));
+  req.job = job;
+  return Result<RobotRequest>(req);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -225,7 +424,12 @@ std::string formatReply(Dialect dialect, const RobotReply& reply) {
 
   switch (dialect) {
     case Dialect::Ur:
+    case Dialect::Strict:
       return formatUr(status, reply.cycleId, reply.pose, zeroPose);
+    case Dialect::Fanuc:
+      return formatFanuc(status, reply.cycleId, reply.pose, zeroPose);
+    case Dialect::Binary:
+      return formatBinary(status, reply.cycleId, reply.pose, zeroPose);
     case Dialect::Abb: {
       std::string out = formatAbb(status, reply.cycleId, reply.pose, zeroPose);
       // Unreachable with the bounds above (worst case is 77 characters); kept so that a
@@ -236,6 +440,22 @@ std::string formatReply(Dialect dialect, const RobotReply& reply) {
     }
   }
   return formatUr(statusCode(Status::Internal), reply.cycleId, reply.pose, true);
+}
+
+Result<std::string> formatStrictPoseFrame(const Pose& pose) {
+  if (!representable(pose)) return fail(Status::Internal, "pose cannot be sent (non-finite or beyond +-99999.999 mm)");
+  const Vec3 rv = toRotationVector(pose);
+  const double values[6] = {pose.x / 1000.0, pose.y / 1000.0, pose.z / 1000.0, rv.x, rv.y, rv.z};
+  if (anyNonFinite(values, 6)) return fail(Status::Internal, "rotation vector is not finite");
+  std::string out;
+  out.reserve(80);
+  out.push_back('(');
+  for (std::size_t i = 0; i < 6; ++i) {
+    if (i > 0) out.push_back(',');
+    appendFixed(out, values[i], 6);
+  }
+  out.push_back(')');
+  return out;
 }
 
 }  // namespace vgr::protocol

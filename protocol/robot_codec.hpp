@@ -1,7 +1,8 @@
 // Robot dialect codec: request framing and parsing, reply formatting (PROTOCOLS.md,
-// "Dialects vgrd offers", the `ur` and `abb` dialects). Pure: bytes in, messages out, no
-// sockets, no threads, no global state; every function here is safe to call from any
-// thread (a RequestSplitter object is not shared between threads).
+// "Dialects vgrd offers": `ur`, `abb`, `fanuc`, `binary`; the `strict` exchange is in
+// protocol/robot_strict.hpp). Pure: bytes in, messages out, no sockets, no threads, no
+// global state; every function here is safe to call from any thread (a RequestSplitter or
+// RequestDecoder object is not shared between threads).
 #pragma once
 
 #include <cstddef>
@@ -18,19 +19,27 @@ namespace vgr::protocol {
 
 // One wire dialect per robot endpoint, chosen in the cell config.
 enum class Dialect {
-  Ur,   // URScript client: socket_send_line("GET,<job>") / socket_read_ascii_float(8)
-  Abb,  // RAPID client: SocketSend \Str:="GET,<job>#" / SocketReceive \Str (<= 80 chars)
+  Ur,      // URScript client: socket_send_line("GET,<job>") / socket_read_ascii_float(8)
+  Abb,     // RAPID client: SocketSend \Str:="GET,<job>#" / SocketReceive \Str (<= 80 chars)
+  Fanuc,   // KAREL client: WRITE "GET,<job>" + CR / READ up to the line end, fixed columns
+  Binary,  // int32 big-endian frames (URCap socket_read_binary_integer, RAPID \Network)
+  Strict,  // paper 002 four-step push: <CMD>, <CMD>_wait_pos, pose frame, <CMD>_done
 };
 
-// "ur" or "abb" (lower case, exactly as written in cell.yaml); nullopt otherwise.
+// "ur", "abb", "fanuc", "binary" or "strict" (lower case, exactly as written in
+// cell.yaml); nullopt otherwise.
 std::optional<Dialect> parseDialect(std::string_view text);
-// "ur" / "abb".
+// The cell.yaml spelling.
 std::string_view dialectName(Dialect dialect);
 
 // Longest request line accepted, terminator excluded. Real requests are ~12 bytes.
 inline constexpr std::size_t kMaxRequestBytes = 256;
 // Longest reply a RAPID SocketReceive \Str can take in one call.
 inline constexpr std::size_t kAbbMaxReplyChars = 80;
+// KAREL STRING[254] is the longest string a READ can fill; the fanuc reply is fixed at
+// kFanucReplyChars (CR LF included), far below it.
+inline constexpr std::size_t kFanucMaxReplyChars = 254;
+inline constexpr std::size_t kFanucReplyChars = 75;
 // Largest |x|, |y|, |z| (mm) a reply may carry; beyond it the reply is INTERNAL with zeros.
 // Bounds the ABB reply to 80 characters; also applied to UR so both dialects agree.
 inline constexpr double kMaxAbsPositionMm = 99999.999;
@@ -67,17 +76,63 @@ class RequestSplitter {
 inline constexpr int kMinJob = 1;
 inline constexpr int kMaxJob = 32767;
 
-struct RobotRequest {
-  int job = 0;        // [kMinJob, kMaxJob]
-  bool last = false;  // "GET,<job>,LAST": deliver the latest result again
+enum class Command {
+  Get,  // "GET[,<job>[,LAST]]": the next part (or, with LAST, the latest reply again)
+  Job,  // "JOB,<job>": switch this robot's current job (what "GET" without a job means)
 };
 
-// Parses one request line (terminator already removed): "GET,<job>" or "GET,<job>,LAST".
-// The command and LAST are case-sensitive; spaces and tabs around fields are tolerated;
-// job is a decimal integer in [1, 32767] without sign. Errors: an unknown or missing
-// command -> Status::UnknownCommand (-1); a bad, missing or out-of-range job or an
-// unexpected extra field -> Status::BadArgument (-2).
+struct RobotRequest {
+  Command command = Command::Get;
+  int job = 0;        // [kMinJob, kMaxJob]; 0 only for "GET" = the robot's current job
+  bool last = false;  // "GET,<job>,LAST": deliver the latest reply again
+};
+
+// Parses one request line (terminator already removed): "GET", "GET,<job>",
+// "GET,<job>,LAST" or "JOB,<job>". Commands and LAST are case-sensitive; spaces and tabs
+// around fields are tolerated; job is a decimal integer in [1, 32767] without sign.
+// Errors: an unknown command -> Status::UnknownCommand (-1); a bad, empty or out-of-range
+// job or an unexpected extra field -> Status::BadArgument (-2).
 Result<RobotRequest> parseRequest(std::string_view line);
+
+// The `binary` dialect (docs/protocols.md has the byte-by-byte layout). Every field is an
+// int32, big-endian (network order), so URScript's socket_read_binary_integer and RAPID's
+// UnpackRawBytes \IntX:=DINT \Network read each one directly.
+//   request, 16 bytes: magic 'VGRQ' (0x56475251), length 16, command, job
+//   reply,   40 bytes: magic 'VGRA' (0x56475241), length 40, status, cycle,
+//                      x, y, z in µm, w, p, r in millidegrees (R = Rz(r)·Ry(p)·Rx(w))
+namespace binary {
+inline constexpr std::uint32_t kRequestMagic = 0x56475251;  // "VGRQ"
+inline constexpr std::uint32_t kReplyMagic = 0x56475241;    // "VGRA"
+inline constexpr std::size_t kRequestBytes = 16;
+inline constexpr std::size_t kReplyBytes = 40;
+inline constexpr std::int32_t kCmdGet = 1;      // job 0 = the robot's current job
+inline constexpr std::int32_t kCmdGetLast = 2;  // job 0 = the robot's current job
+inline constexpr std::int32_t kCmdJob = 3;      // job in [1, 32767]
+// Encodes a request frame (robot side; used by tests and vgr-sim-robot).
+std::string encodeRequest(std::int32_t command, std::int32_t job);
+// Reads the int32 at byte offset `at` of a frame (big-endian). Precondition: at + 4 <= size.
+std::int32_t readInt32(std::string_view frame, std::size_t at);
+}  // namespace binary
+
+// Turns a byte stream into requests for one dialect: text dialects through
+// RequestSplitter + parseRequest; `binary` through 16-byte frames. A binary stream that
+// does not start with the request magic yields ONE Status::UnknownCommand error per
+// run of garbage and resynchronises at the next magic; a frame with a wrong length, an
+// unknown command or a bad job yields Status::BadArgument / UnknownCommand and the frame
+// is skipped. Memory held: bounded by the splitter's limit or kMaxRequestBytes.
+class RequestDecoder {
+ public:
+  explicit RequestDecoder(Dialect dialect);
+  void append(std::string_view bytes);
+  // The next decoded request or error, or nullopt when more bytes are needed.
+  std::optional<Result<RobotRequest>> next();
+
+ private:
+  Dialect dialect_;
+  RequestSplitter text_;
+  std::string bin_;
+  bool inGarbage_ = false;  // binary: an error was already reported for the current run
+};
 
 struct RobotReply {
   Status status = Status::Ok;
@@ -85,17 +140,32 @@ struct RobotReply {
   Pose pose;                  // mm + unit quaternion, robot base/user frame; ignored unless Ok
 };
 
-// Formats one reply, ready to send in ONE write, no terminator:
+// Formats one reply, ready to send in ONE write:
 //  ur : "(<status>,<cycle>,<x>,<y>,<z>,<rx>,<ry>,<rz>)", x/y/z in metres and the rotation
 //       vector in radians, 6 decimals; socket_read_ascii_float(8) returns exactly these 8
 //       values. Matches \(-?\d+,\d+(,-?\d+\.\d{6}){6}\)
 //  abb: "<status>,<cycle>,<x>,<y>,<z>,<rz>,<ry>,<rx>", mm and Z-Y-X Euler degrees
 //       (OrientZYX(rz, ry, rx)), 3 decimals, at most 80 characters. Matches
 //       -?\d+,\d+(,-?\d+\.\d{3}){6}
+//  fanuc: fixed columns, sign-padded, then CR LF, always kFanucReplyChars (75) bytes:
+//       "+0000,0004711,+00512.300,-00120.050,+00035.000,+000.000,+000.000,-012.500\r\n"
+//       status cols 1-5, cycle 7-13, X 15-24, Y 26-35, Z 37-46 (mm), W 48-55, P 57-64,
+//       R 66-73 (degrees, R = Rz(R)·Ry(P)·Rx(W)), commas in between (1-based columns, as
+//       KAREL's SUB_STR counts).
+//  binary: the 40-byte reply frame above.
+//  strict: never a reply to a request (the strict session pushes; see robot_strict.hpp);
+//       formats like `ur` so that a stray call still produces a well-formed line.
 // Numbers are locale-independent fixed notation, never an exponent, NaN or "-0.000".
 // A reply whose status is not Ok carries a zero pose. A pose with a non-finite component
 // or |x|, |y|, |z| > kMaxAbsPositionMm becomes status Internal (-8) with a zero pose,
 // keeping the cycle id.
 std::string formatReply(Dialect dialect, const RobotReply& reply);
+
+// The strict dialect's pose frame (paper 002: "{x, y, z, Rx, Ry, Rz} encoded in a byte
+// frame"): "(<x>,<y>,<z>,<rx>,<ry>,<rz>)" in metres and a rotation vector in radians, 6
+// decimals, which URScript's socket_read_ascii_float(6) turns into p[x, y, z, rx, ry, rz].
+// Error (Status::Internal) for a pose the wire cannot carry (non-finite, beyond
+// kMaxAbsPositionMm).
+Result<std::string> formatStrictPoseFrame(const Pose& pose);
 
 }  // namespace vgr::protocol

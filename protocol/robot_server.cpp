@@ -10,7 +10,7 @@
 #include <exception>
 #include <memory>
 #include <string_view>
-#include <unordered_map>
+#include <map>
 #include <utility>
 #include <vector>
 
@@ -35,6 +35,9 @@ constexpr std::size_t kReadChunkBytes = 512;   // one async_read_some
 constexpr std::size_t kMaxQueuedRequests = 8;  // per connection; beyond it we stop reading
 constexpr auto kWriteTimeout = std::chrono::seconds(5);
 constexpr auto kAcceptRetryDelay = std::chrono::milliseconds(200);
+// Strict dialect: pause before asking again after a reply that came at once and had
+// nothing to push (e.g. NO_PART_FOUND), so a misconfigured job never spins.
+constexpr auto kStrictRetryDelay = std::chrono::milliseconds(100);
 // Dead peers (robot powered off, cable pulled): keepalive probes after 10 s of silence,
 // every 5 s, 3 unanswered -> the read fails after ~25 s and the session is cleaned up.
 // Idle but alive robots answer the probes and keep their connection for hours.
@@ -66,44 +69,44 @@ struct ServerCore : std::enable_shared_from_this<ServerCore> {
   void doAccept();
   void onAccept(const error_code& ec, tcp::socket socket);
   void stopAll();
+  bool allowed(const asio::ip::address& peer) const;
 
   asio::io_context& io;
   const RobotEndpoint endpoint;
   const RequestHandler handler;
+  StrictOutcomeFn strictOutcome;
+  std::vector<asio::ip::address> allowedAddresses;  // parsed from endpoint.allowedClients
   tcp::acceptor acceptor;
   asio::steady_timer retryTimer;
   std::uint16_t boundPort = 0;
   bool started = false;
   bool stopped = false;
   std::uint64_t nextSessionId = 1;
-  // Open sessions. Weak: a session is owned by its pending operations (Beast's shape).
-  std::unordered_map<std::uint64_t, std::weak_ptr<Session>> sessions;
+  // Open sessions by id (ids grow: a smaller id is an older connection). Weak: a session
+  // is owned by its pending operations (Beast's shape).
+  std::map<std::uint64_t, std::weak_ptr<Session>> sessions;
 };
 
-// One robot connection. Requests are served strictly one at a time: the next queued
-// request goes to the handler only after the previous reply was written. Reading goes on
-// while a request is pending (to queue pipelined requests and to notice a vanished peer)
-// until kMaxQueuedRequests are queued; then TCP flow control holds the robot back.
+// What every connection shares: the socket, the one-write-at-a-time reply path with its
+// deadline, the close path, and the hooks a ReplyFn reaches. Subclasses: RequestSession
+// (robot asks, vgrd answers: ur, abb, fanuc, binary) and StrictSession (vgrd pushes).
 class Session : public std::enable_shared_from_this<Session> {
  public:
-  Session(tcp::socket socket, std::shared_ptr<ServerCore> server, std::uint64_t id, std::string peer)
+  Session(tcp::socket socket, std::shared_ptr<ServerCore> server, std::uint64_t id, std::string peer,
+          asio::ip::address address)
       : socket_(std::move(socket)),
         writeTimer_(server->io),
         server_(std::move(server)),
         id_(id),
-        peer_(std::move(peer)) {}
+        peer_(std::move(peer)),
+        address_(std::move(address)) {}
+  virtual ~Session() = default;
+  Session(const Session&) = delete;
+  Session& operator=(const Session&) = delete;
 
-  void start() { advance(); }
-
-  void close(std::string_view reason);
-
-  // Reply for request number `seq`; ignored unless it is the pending one on an open session.
-  void deliver(std::uint64_t seq, const RobotReply& reply) {
-    if (closed_ || !awaitingReply_ || seq != seq_) return;
-    awaitingReply_ = false;
-    writeReply(reply);
-    advance();
-  }
+  virtual void start() = 0;
+  // Reply for request number `seq` from the handler; ignored unless it is still awaited.
+  virtual void deliver(std::uint64_t seq, const RobotReply& reply) = 0;
 
   // The handler dropped every copy of the ReplyFn for `seq` without calling it.
   void replyDropped(std::uint64_t seq, int job) {
@@ -115,39 +118,120 @@ class Session : public std::enable_shared_from_this<Session> {
     deliver(seq, r);
   }
 
+  void close(std::string_view reason);
+  bool closed() const { return closed_; }
+  const asio::ip::address& address() const { return address_; }
   asio::io_context::executor_type executor() { return server_->io.get_executor(); }
+
+ protected:
+  // Hands `req` to the handler as request number seq_+1; the reply comes to deliver().
+  void callHandler(const RobotRequest& req);
+
+  // One write of `bytes` at a time, with kWriteTimeout; onWritten() after success.
+  void writeBytes(std::string bytes) {
+    outgoing_ = std::move(bytes);
+    writing_ = true;
+    const std::uint64_t gen = ++writeGen_;
+    writeTimer_.expires_after(kWriteTimeout);
+    writeTimer_.async_wait([self = shared_from_this(), gen](const error_code& ec) {
+      if (!ec && self->writing_ && self->writeGen_ == gen) self->close("reply write timed out");
+    });
+    asio::async_write(socket_, asio::buffer(outgoing_),
+                      [self = shared_from_this()](const error_code& ec, std::size_t) { self->onWrite(ec); });
+  }
+  virtual void onWritten() = 0;
+  virtual void onClosing() {}
+
+  void onWrite(const error_code& ec) {
+    writing_ = false;
+    writeTimer_.cancel();
+    if (closed_) return;
+    if (ec) {
+      close(ec.message());
+      return;
+    }
+    ++replies_;
+    onWritten();
+  }
+
+  tcp::socket socket_;
+  asio::steady_timer writeTimer_;
+  std::shared_ptr<ServerCore> server_;
+  const std::uint64_t id_;
+  const std::string peer_;
+  const asio::ip::address address_;
+  std::array<char, kReadChunkBytes> readBuf_{};
+  std::string outgoing_;  // the bytes being written
+  std::uint64_t seq_ = 0;  // number of the request handed to the handler
+  std::uint64_t writeGen_ = 0;
+  std::uint64_t replies_ = 0;
+  bool reading_ = false;
+  bool writing_ = false;
+  bool awaitingReply_ = false;
+  bool closed_ = false;
+};
+
+// One robot connection of a request/reply dialect. Requests are served strictly one at a
+// time: the next queued request goes to the handler only after the previous reply was
+// written. Reading goes on while a request is pending (to queue pipelined requests and to
+// notice a vanished peer) until kMaxQueuedRequests are queued; then TCP flow control
+// holds the robot back.
+class RequestSession final : public Session {
+ public:
+  RequestSession(tcp::socket socket, std::shared_ptr<ServerCore> server, std::uint64_t id, std::string peer,
+                 asio::ip::address address)
+      : Session(std::move(socket), server, id, std::move(peer), std::move(address)), decoder_(server->endpoint.dialect) {}
+
+  void start() override { advance(); }
+
+  void deliver(std::uint64_t seq, const RobotReply& reply) override {
+    if (closed_ || !awaitingReply_ || seq != seq_) return;
+    awaitingReply_ = false;
+    writeBytes(formatReply(server_->endpoint.dialect, reply));
+    advance();
+  }
 
  private:
   // Moves the state machine on after any event: queue complete requests, serve the next
   // one, keep reading if there is room, finish after the peer's EOF.
   void advance() {
     if (closed_) return;
-    drainSplitter();
+    drainDecoder();
     pump();
     if (closed_) return;
-    drainSplitter();
+    drainDecoder();
     if (!reading_ && !peerEof_ && inbox_.size() < kMaxQueuedRequests) doRead();
     if (peerEof_ && !awaitingReply_ && !writing_ && inbox_.empty()) close("peer closed the connection");
   }
 
-  void drainSplitter() {
+  void drainDecoder() {
     while (inbox_.size() < kMaxQueuedRequests) {
-      std::optional<Result<std::string>> line = splitter_.next();
-      if (!line) return;
-      if (*line) {
-        inbox_.push_back(parseRequest(**line));
-      } else {
-        inbox_.push_back(std::unexpected(std::move(line->error())));
-      }
+      std::optional<Result<RobotRequest>> item = decoder_.next();
+      if (!item) return;
+      inbox_.push_back(std::move(*item));
     }
   }
 
-  void pump();
+  void pump() {
+    if (closed_ || awaitingReply_ || writing_ || inbox_.empty()) return;
+    Result<RobotRequest> item = std::move(inbox_.front());
+    inbox_.pop_front();
+    if (!item) {  // malformed: answer at once, in order, and keep the connection
+      log::debug("robot", "robot '{}': {} sent a bad request: {}", server_->endpoint.name, peer_,
+                 item.error().message);
+      RobotReply r;
+      r.status = item.error().code;
+      writeBytes(formatReply(server_->endpoint.dialect, r));
+      return;
+    }
+    callHandler(*item);
+  }
 
   void doRead() {
     reading_ = true;
-    socket_.async_read_some(asio::buffer(readBuf_),
-                            [self = shared_from_this()](const error_code& ec, std::size_t n) { self->onRead(ec, n); });
+    socket_.async_read_some(asio::buffer(readBuf_), [self = shared_from_this(), this](const error_code& ec, std::size_t n) {
+      onRead(ec, n);
+    });
   }
 
   void onRead(const error_code& ec, std::size_t n) {
@@ -163,52 +247,166 @@ class Session : public std::enable_shared_from_this<Session> {
       close(ec.message());
       return;
     }
-    splitter_.append(std::string_view(readBuf_.data(), n));
+    decoder_.append(std::string_view(readBuf_.data(), n));
     advance();
   }
 
-  // One reply = one async_write of the whole formatted string.
-  void writeReply(const RobotReply& reply) {
-    outgoing_ = formatReply(server_->endpoint.dialect, reply);
-    writing_ = true;
-    const std::uint64_t gen = ++writeGen_;
-    writeTimer_.expires_after(kWriteTimeout);
-    writeTimer_.async_wait([self = shared_from_this(), gen](const error_code& ec) {
-      if (!ec && self->writing_ && self->writeGen_ == gen) self->close("reply write timed out");
-    });
-    asio::async_write(socket_, asio::buffer(outgoing_),
-                      [self = shared_from_this()](const error_code& ec, std::size_t) { self->onWrite(ec); });
+  void onWritten() override { advance(); }
+
+  RequestDecoder decoder_;
+  std::deque<Result<RobotRequest>> inbox_;  // parsed requests and error replies, in order
+  bool peerEof_ = false;
+};
+
+// One robot connection of the strict dialect (paper 002): vgrd asks its handler for the
+// robot's next part (GET of the current job) whenever idle and pushes every Ok result
+// through the four-step exchange of StrictExchange, each step within stepTimeoutMs. A
+// wrong token, silence or a lost connection aborts the exchange with an error log and a
+// StrictOutcome, and the connection is closed so that the robot program starts afresh;
+// the server keeps accepting.
+class StrictSession final : public Session {
+ public:
+  StrictSession(tcp::socket socket, std::shared_ptr<ServerCore> server, std::uint64_t id, std::string peer,
+                asio::ip::address address)
+      : Session(std::move(socket), server, id, std::move(peer), std::move(address)),
+        exchange_(server->endpoint.strict),
+        stepTimer_(server->io) {}
+
+  void start() override {
+    doRead();
+    ask();
   }
 
-  void onWrite(const error_code& ec) {
-    writing_ = false;
-    writeTimer_.cancel();
+  void deliver(std::uint64_t seq, const RobotReply& reply) override {
+    if (closed_ || !awaitingReply_ || seq != seq_) return;
+    awaitingReply_ = false;
+    if (reply.status == Status::Ok) {
+      Result<std::string> frame = formatStrictPoseFrame(reply.pose);
+      if (frame) {
+        cycleId_ = reply.cycleId;
+        writeBytes(exchange_.begin(std::move(*frame)));
+        armStepTimer();
+        return;
+      }
+      log::error("robot", "robot '{}': cycle {}: {}; not sent", server_->endpoint.name, reply.cycleId,
+                 frame.error().message);
+    }
+    // Nothing to move. Statuses 2 and 3 came after the reply deadline: ask again at once;
+    // anything else may have come at once: pause so a misconfiguration cannot spin.
+    const bool waited = reply.status == Status::ResultNotReady || reply.status == Status::NoNewTrigger;
+    if (waited) {
+      ask();
+    } else {
+      log::debug("robot", "robot '{}': cycle {} ended {}: nothing to push", server_->endpoint.name, reply.cycleId,
+                 statusCode(reply.status));
+      pauseThenAsk();
+    }
+  }
+
+ private:
+  void ask() {
+    if (closed_ || awaitingReply_ || exchange_.step() != StrictExchange::Step::Idle) return;
+    RobotRequest req;  // GET of the robot's current job
+    callHandler(req);
+  }
+
+  void pauseThenAsk() {
+    stepTimer_.expires_after(kStrictRetryDelay);
+    stepTimer_.async_wait([self = shared_from_this(), this](const error_code& ec) {
+      if (!ec && !closed_) ask();
+    });
+  }
+
+  void armStepTimer() {
+    const std::uint64_t gen = ++stepGen_;
+    stepTimer_.expires_after(std::chrono::milliseconds(server_->endpoint.stepTimeoutMs));
+    stepTimer_.async_wait([self = shared_from_this(), this, gen](const error_code& ec) {
+      if (ec || closed_ || gen != stepGen_) return;
+      finish(exchange_.onTimeout());
+    });
+  }
+
+  void doRead() {
+    reading_ = true;
+    socket_.async_read_some(asio::buffer(readBuf_), [self = shared_from_this(), this](const error_code& ec, std::size_t n) {
+      onRead(ec, n);
+    });
+  }
+
+  void onRead(const error_code& ec, std::size_t n) {
+    reading_ = false;
     if (closed_) return;
     if (ec) {
-      close(ec.message());
+      close(ec == asio::error::eof ? std::string("peer closed the connection") : ec.message());
       return;
     }
-    ++replies_;
-    advance();
+    exchange_.feed(std::string_view(readBuf_.data(), n));
+    for (;;) {
+      StrictExchange::Event e = exchange_.poll();
+      if (e.kind == StrictExchange::EventKind::None) break;
+      if (e.kind == StrictExchange::EventKind::SendPose) {
+        writeBytes(std::move(e.bytes));
+        armStepTimer();
+        continue;
+      }
+      if (e.kind == StrictExchange::EventKind::Unexpected) {
+        log::warn("robot", "robot '{}': {} sent '{}' while no exchange was running; ignored", server_->endpoint.name,
+                  peer_, e.detail);
+        continue;
+      }
+      finish(std::move(e));
+      if (closed_) return;
+    }
+    doRead();
   }
 
-  tcp::socket socket_;
-  asio::steady_timer writeTimer_;
-  std::shared_ptr<ServerCore> server_;
-  const std::uint64_t id_;
-  const std::string peer_;
-  RequestSplitter splitter_;
-  std::array<char, kReadChunkBytes> readBuf_{};
-  std::deque<Result<RobotRequest>> inbox_;  // parsed requests and error replies, in order
-  std::string outgoing_;                    // the reply being written
-  std::uint64_t seq_ = 0;                   // number of the request handed to the handler
-  std::uint64_t writeGen_ = 0;
-  std::uint64_t replies_ = 0;
-  bool reading_ = false;
-  bool writing_ = false;
-  bool awaitingReply_ = false;
-  bool peerEof_ = false;
-  bool closed_ = false;
+  // Completed or Failed.
+  void finish(StrictExchange::Event e) {
+    ++stepGen_;
+    stepTimer_.cancel();
+    StrictOutcome outcome;
+    outcome.cycleId = cycleId_;
+    if (e.kind == StrictExchange::EventKind::Completed) {
+      ++exchanges_;
+      log::debug("robot", "robot '{}': cycle {} pushed and done", server_->endpoint.name, cycleId_);
+      report(outcome);
+      ask();
+      return;
+    }
+    if (e.kind != StrictExchange::EventKind::Failed) return;
+    outcome.status = e.status;
+    outcome.detail = e.detail;
+    log::error("robot", "robot '{}': {}: exchange for cycle {} aborted with status {} ({}): {}", server_->endpoint.name,
+               peer_, cycleId_, statusCode(e.status), statusName(e.status), e.detail);
+    report(outcome);
+    close("strict exchange aborted");
+  }
+
+  void report(const StrictOutcome& outcome) {
+    if (server_->strictOutcome) server_->strictOutcome(server_->endpoint.name, outcome);
+  }
+
+  void onWritten() override {}
+
+  void onClosing() override {
+    ++stepGen_;
+    stepTimer_.cancel();
+    StrictExchange::Event e = exchange_.onClosed();
+    if (e.kind != StrictExchange::EventKind::Failed) return;
+    StrictOutcome outcome;
+    outcome.cycleId = cycleId_;
+    outcome.status = e.status;
+    outcome.detail = e.detail;
+    log::error("robot", "robot '{}': {}: exchange for cycle {} aborted with status {} ({}): {}", server_->endpoint.name,
+               peer_, cycleId_, statusCode(e.status), statusName(e.status), e.detail);
+    report(outcome);
+  }
+
+  StrictExchange exchange_;
+  asio::steady_timer stepTimer_;
+  std::uint64_t stepGen_ = 0;
+  std::uint32_t cycleId_ = 0;
+  std::uint64_t exchanges_ = 0;
 };
 
 // State behind one ReplyFn: keeps the session alive until the reply is given (or every
@@ -237,28 +435,16 @@ class PendingReply {
   std::atomic<bool> done_{false};
 };
 
-void Session::pump() {
-  if (closed_ || awaitingReply_ || writing_ || inbox_.empty()) return;
-  Result<RobotRequest> item = std::move(inbox_.front());
-  inbox_.pop_front();
-
-  if (!item) {  // malformed: answer at once, in order, and keep the connection
-    log::debug("robot", "robot '{}': {} sent a bad request: {}", server_->endpoint.name, peer_, item.error().message);
-    RobotReply r;
-    r.status = item.error().code;
-    writeReply(r);
-    return;
-  }
-
+void Session::callHandler(const RobotRequest& req) {
   awaitingReply_ = true;
   const std::uint64_t seq = ++seq_;
-  auto pending = std::make_shared<PendingReply>(shared_from_this(), seq, item->job);
+  auto pending = std::make_shared<PendingReply>(shared_from_this(), seq, req.job);
   ReplyFn reply = [pending](const RobotReply& r) { pending->complete(r); };
   try {
-    server_->handler(server_->endpoint.name, *item, std::move(reply));
+    server_->handler(server_->endpoint.name, req, std::move(reply));
   } catch (const std::exception& e) {
     log::error("robot", "robot '{}': request handler threw for job {}: {}; answering INTERNAL", server_->endpoint.name,
-               item->job, e.what());
+               req.job, e.what());
     RobotReply r;
     r.status = Status::Internal;
     pending->complete(r);
@@ -269,7 +455,7 @@ void Session::close(std::string_view reason) {
   if (closed_) return;
   closed_ = true;
   awaitingReply_ = false;
-  inbox_.clear();
+  onClosing();
   error_code ignored;
   socket_.shutdown(tcp::socket::shutdown_both, ignored);  // ENOTCONN after a reset is expected
   socket_.close(ignored);
@@ -277,6 +463,18 @@ void Session::close(std::string_view reason) {
   server_->sessions.erase(id_);
   log::info("robot", "robot '{}': {} disconnected ({}); {} replies sent, {} clients left", server_->endpoint.name,
             peer_, reason, replies_, server_->sessions.size());
+}
+
+bool ServerCore::allowed(const asio::ip::address& peer) const {
+  if (allowedAddresses.empty()) return true;
+  for (const auto& a : allowedAddresses) {
+    if (a == peer) return true;
+    // An IPv4 client on a dual-stack socket shows up as ::ffff:a.b.c.d.
+    if (peer.is_v6() && peer.to_v6().is_v4_mapped() && a.is_v4() &&
+        asio::ip::make_address_v4(asio::ip::v4_mapped, peer.to_v6()) == a.to_v4())
+      return true;
+  }
+  return false;
 }
 
 void ServerCore::doAccept() {
@@ -298,12 +496,37 @@ void ServerCore::onAccept(const error_code& ec, tcp::socket socket) {
   }
 
   const std::string peer = peerName(socket);
-  if (sessions.size() >= endpoint.maxClients) {
-    log::warn("robot", "robot '{}': refusing {}: already {} clients (maxClients)", endpoint.name, peer,
-              sessions.size());
+  error_code addrEc;
+  const asio::ip::address address = socket.remote_endpoint(addrEc).address();
+  if (addrEc || !allowed(address)) {
+    log::warn("robot", "robot '{}': refusing {}: not in allowed_clients", endpoint.name, peer);
     error_code ignored;
     socket.close(ignored);
-  } else {
+    doAccept();
+    return;
+  }
+  if (sessions.size() >= endpoint.maxClients) {
+    // Full: a reconnecting robot replaces its own oldest (stale) connection.
+    std::shared_ptr<Session> stale;
+    for (auto& [sid, weak] : sessions) {
+      auto s = weak.lock();
+      if (s && s->address() == address) {
+        stale = std::move(s);
+        break;  // the map is ordered by id: this is the oldest
+      }
+    }
+    if (stale) {
+      stale->close("replaced by a new connection from the same address");
+    } else {
+      log::warn("robot", "robot '{}': refusing {}: already {} clients (maxClients)", endpoint.name, peer,
+                sessions.size());
+      error_code ignored;
+      socket.close(ignored);
+      doAccept();
+      return;
+    }
+  }
+  {
     // Option failures only cost latency or dead-peer detection; the session still works.
     error_code optEc;
     socket.set_option(tcp::no_delay(true), optEc);  // the reply leaves in one segment, now
@@ -315,7 +538,11 @@ void ServerCore::onAccept(const error_code& ec, tcp::socket socket) {
     if (optEc) log::debug("robot", "robot '{}': socket option for {}: {}", endpoint.name, peer, optEc.message());
 
     const std::uint64_t id = nextSessionId++;
-    auto session = std::make_shared<Session>(std::move(socket), shared_from_this(), id, peer);
+    std::shared_ptr<Session> session;
+    if (endpoint.dialect == Dialect::Strict)
+      session = std::make_shared<StrictSession>(std::move(socket), shared_from_this(), id, peer, address);
+    else
+      session = std::make_shared<RequestSession>(std::move(socket), shared_from_this(), id, peer, address);
     sessions.emplace(id, session);
     log::info("robot", "robot '{}': {} connected ({}/{} clients)", endpoint.name, peer, sessions.size(),
               endpoint.maxClients);
@@ -359,6 +586,15 @@ Result<void> RobotServer::start() {
       fmt::format("robot '{}' ({} dialect) on {}:{}", ep.name, dialectName(ep.dialect), ep.bind, ep.port);
   if (l.started || l.stopped) return fail(Status::Internal, where + ": server already started");
   if (ep.maxClients == 0) return fail(Status::Internal, where + ": maxClients is 0");
+  if (ep.dialect == Dialect::Strict && ep.stepTimeoutMs <= 0)
+    return fail(Status::Internal, where + ": stepTimeoutMs must be > 0");
+  l.allowedAddresses.clear();
+  for (const std::string& a : ep.allowedClients) {
+    error_code aec;
+    const asio::ip::address parsed = asio::ip::make_address(a, aec);
+    if (aec) return fail(Status::Internal, fmt::format("{}: allowed client '{}' is not an IP address", where, a));
+    l.allowedAddresses.push_back(parsed);
+  }
 
   error_code ec;
   tcp::endpoint bindTo;
@@ -398,6 +634,8 @@ Result<void> RobotServer::start() {
   l.doAccept();
   return {};
 }
+
+void RobotServer::onStrictOutcome(StrictOutcomeFn fn) { listener_->strictOutcome = std::move(fn); }
 
 void RobotServer::stop() {
   if (listener_) listener_->stopAll();

@@ -12,8 +12,11 @@
 #include <memory>
 #include <string>
 
+#include <vector>
+
 #include "core/result.hpp"
 #include "protocol/robot_codec.hpp"
+#include "protocol/robot_strict.hpp"
 
 namespace boost::asio {
 class io_context;
@@ -26,8 +29,27 @@ struct RobotEndpoint {
   Dialect dialect = Dialect::Ur;
   std::string bind = "127.0.0.1";  // IP address ("0.0.0.0" / "::" for all) or host name
   std::uint16_t port = 0;          // 0 = ephemeral (tests); see RobotServer::port()
-  std::size_t maxClients = 8;      // further connections are accepted and closed at once
+  // Open connections at most. When full, a new connection from an address that already
+  // has one replaces the oldest such connection (a robot that rebooted or re-ran its
+  // program leaves a stale socket behind); from any other address it is closed at once.
+  std::size_t maxClients = 8;
+  // Peer IP addresses allowed to connect (numeric, v4 or v6); empty = anyone. Others are
+  // closed at once with a warning.
+  std::vector<std::string> allowedClients;
+  // Strict dialect only: the tokens and the time each step may take (ms, > 0).
+  StrictTokens strict;
+  int stepTimeoutMs = 10000;
 };
+
+// Strict dialect: the end of one exchange (one pose pushed to one robot connection).
+struct StrictOutcome {
+  std::uint32_t cycleId = 0;
+  Status status = Status::Ok;  // Ok; -1 wrong token; -5 silence past the step timeout;
+                               // -8 connection lost mid-exchange
+  std::string detail;          // "" when Ok; otherwise what was expected and what came
+};
+// Called on the I/O thread after every strict exchange (after the log line).
+using StrictOutcomeFn = std::function<void(const std::string& robotName, const StrictOutcome& outcome)>;
 
 // Sends the reply to the request it was handed for. Call exactly once, on the I/O thread
 // (a call from another thread is marshalled to the I/O thread, but do not rely on it).
@@ -40,6 +62,11 @@ using ReplyFn = std::function<void(const RobotReply&)>;
 // (the next request of the same connection waits for this one's reply). Must not block:
 // keep `reply` and call it later (e.g. from a timer or a posted vision result) if the
 // answer is not ready. An exception escaping the handler is logged and answered INTERNAL.
+//
+// Strict dialect: the session itself asks, with GET (job 0 = the robot's current job),
+// whenever it is idle; a reply with status Ok is pushed to the robot through the four-step
+// exchange, any other reply is not sent (statuses 2 and 3 re-ask at once, others after a
+// short pause).
 using RequestHandler = std::function<void(const std::string& robotName, const RobotRequest& req, ReplyFn reply)>;
 
 class RobotServer {
@@ -56,6 +83,9 @@ class RobotServer {
   // thread runs the io_context, or on the I/O thread. Fails if already started (a stopped
   // server is not restarted: construct a new one).
   Result<void> start();
+
+  // Strict dialect: observe the outcome of every exchange. Set before start().
+  void onStrictOutcome(StrictOutcomeFn fn);
 
   // Closes the acceptor and every session (pending replies are dropped). Idempotent.
   // Call on the I/O thread, or after the io_context stopped.

@@ -8,3 +8,11 @@ cd "$(dirname "$0")/.."
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DVGR_WERROR=ON
 cmake --build build -j"$(nproc)"
 ctest --test-dir build --output-on-failure --timeout 600
+
+# Fuzzers (tests/fuzz/, docs/fuzzing.md): a second build dir with clang, libFuzzer, ASan and
+# UBSan, only the fuzz targets; each runs VGR_FUZZ_SECONDS (20) from an empty corpus.
+# No -Werror here: clang's extra warnings on code g++ already checks with -Werror above.
+cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
+  -DVGR_FUZZ=ON -DVGR_SANITIZE=ON
+cmake --build build-fuzz -j"$(nproc)" --target vgr_fuzzers
+ctest --test-dir build-fuzz -L fuzz --output-on-failure

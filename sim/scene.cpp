@@ -150,4 +150,10 @@ SceneTruth SceneRenderer::render(std::uint64_t frameId, cv::Mat& dst) const {
   return t;
 }
 
+SceneTruth SceneRenderer::render16(std::uint64_t frameId, cv::Mat& dst, cv::Mat& scratch) const {
+  const SceneTruth t = render(frameId, scratch);
+  scratch.convertTo(dst, CV_16UC1, 257.0);
+  return t;
+}
+
 }  // namespace vgr::sim

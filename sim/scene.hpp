@@ -54,6 +54,10 @@ class SceneRenderer {
   // size differs) and returns its truth. Thread-safe (const, no shared state).
   SceneTruth render(std::uint64_t frameId, cv::Mat& dst) const;
 
+  // The same frame as render() as 16-bit gray (CV_16UC1, each 8-bit level v as v * 257, so
+  // full scale is 65535), for Mono16 cameras. `scratch` is the 8-bit render target (reused).
+  SceneTruth render16(std::uint64_t frameId, cv::Mat& dst, cv::Mat& scratch) const;
+
   // Renders a given truth (for tests that choose the pose themselves).
   void renderTruth(const SceneTruth& truth, std::uint64_t noiseSeed, cv::Mat& dst) const;
 

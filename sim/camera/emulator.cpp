@@ -5,13 +5,20 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <mutex>
+#include <thread>
+#include <vector>
 
 #include <arv.h>
 #include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "core/log.hpp"
 
@@ -21,37 +28,92 @@ struct CameraEmulator::Impl {
   SceneRenderer renderer;
   EmulatorOptions options;
   ArvGvFakeCamera* camera = nullptr;
-  cv::Mat frame;  // reused render target
+  cv::Mat frame, frame16, scratch;  // reused render targets (camera thread)
+  std::vector<cv::Mat> images;      // image-folder mode: CV_8UC1 or CV_16UC1, all one size
+  int width = 0, height = 0;        // sensor size
   std::atomic<std::uint64_t> served{0};
   std::FILE* truth = nullptr;
+  std::mutex lineMutex;
 
   Impl(SceneRenderer r, EmulatorOptions o) : renderer(std::move(r)), options(std::move(o)) {}
+
+  // The full-sensor image of frame `frameId` at `depth` (CV_8U or CV_16U), and its truth.
+  const cv::Mat& source(std::uint64_t frameId, int depth, SceneTruth& t, bool& hasTruth) {
+    if (!images.empty()) {
+      hasTruth = false;
+      const cv::Mat& img = images[(frameId + images.size() - 1) % images.size()];
+      if (img.depth() == depth) return img;
+      cv::Mat& dst = depth == CV_16U ? frame16 : frame;
+      if (depth == CV_16U)
+        img.convertTo(dst, CV_16U, 257.0);
+      else
+        img.convertTo(dst, CV_8U, 1.0 / 257.0);
+      return dst;
+    }
+    hasTruth = true;
+    if (depth == CV_16U) {
+      t = renderer.render16(frameId, frame16, scratch);
+      return frame16;
+    }
+    t = renderer.render(frameId, frame);
+    return frame;
+  }
 
   // Aravis' fake camera thread, once per frame, with the fake camera's fill-pattern mutex held.
   static void fill(ArvBuffer* buffer, void* data, guint32 /*exposureUs*/, guint32 /*gain*/, ArvPixelFormat format) {
     auto* self = static_cast<Impl*>(data);
     // Aravis 0.8.26 reports the *received* size here (0 for a buffer being filled); the
-    // buffer itself was allocated by the fake camera with the full payload (width x height
-    // for Mono8), and the payload is what it sends.
+    // buffer itself was allocated by the fake camera with the full payload, which it sends.
     auto* out = static_cast<std::uint8_t*>(const_cast<void*>(arv_buffer_get_data(buffer, nullptr)));
     const std::uint64_t frameId = arv_buffer_get_frame_id(buffer);
-    const int w = self->renderer.options().width, h = self->renderer.options().height;
-    if (format != ARV_PIXEL_FORMAT_MONO_8 || out == nullptr || arv_buffer_get_image_width(buffer) != w ||
-        arv_buffer_get_image_height(buffer) != h) {
-      log::warn("sim", "fill: unsupported pixel format 0x{:x} or image size {}x{}", static_cast<unsigned>(format),
-                arv_buffer_get_image_width(buffer), arv_buffer_get_image_height(buffer));
+    gint x = 0, y = 0, w = 0, h = 0;
+    arv_buffer_get_image_region(buffer, &x, &y, &w, &h);
+    const bool mono16 = format == ARV_PIXEL_FORMAT_MONO_16;
+    const bool eightBit = format == ARV_PIXEL_FORMAT_MONO_8 || format == ARV_PIXEL_FORMAT_BAYER_RG_8 ||
+                          format == ARV_PIXEL_FORMAT_BAYER_GR_8 || format == ARV_PIXEL_FORMAT_BAYER_GB_8 ||
+                          format == ARV_PIXEL_FORMAT_BAYER_BG_8;
+    if ((!mono16 && !eightBit) || out == nullptr || x < 0 || y < 0 || w <= 0 || h <= 0 || x + w > self->width ||
+        y + h > self->height) {
+      log::warn("sim", "fill: unsupported pixel format 0x{:x} or region {}x{}+{}+{}", static_cast<unsigned>(format), w, h, x, y);
       return;
     }
-    const SceneTruth t = self->renderer.render(frameId, self->frame);
-    for (int y = 0; y < h; ++y) std::memcpy(out + static_cast<size_t>(y) * w, self->frame.ptr(y), w);
+    SceneTruth t;
+    bool hasTruth = false;
+    // A gray scene is its own Bayer mosaic (R = G = B), so Bayer8 serves the Mono8 bytes.
+    const cv::Mat& src = self->source(frameId, mono16 ? CV_16U : CV_8U, t, hasTruth);
+    const size_t row = static_cast<size_t>(w) * (mono16 ? 2 : 1);
+    for (int r = 0; r < h; ++r) std::memcpy(out + r * row, src.ptr(y + r) + static_cast<size_t>(x) * src.elemSize(), row);
     self->served++;
-    if (self->truth) {
+    if (self->truth && hasTruth) {
       std::fprintf(self->truth,
                    "{\"frame_id\":%llu,\"x_mm\":%.4f,\"y_mm\":%.4f,\"z_mm\":%.4f,\"rz_deg\":%.4f,"
                    "\"u_px\":%.4f,\"v_px\":%.4f,\"angle_img_deg\":%.4f}\n",
                    static_cast<unsigned long long>(frameId), t.xMm, t.yMm, t.zMm, t.rzDeg, t.uPx, t.vPx, t.angleImgDeg);
       std::fflush(self->truth);
     }
+  }
+
+  Result<void> loadImages() {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    std::vector<fs::path> files;
+    for (const auto& e : fs::directory_iterator(options.imagesFolder, ec))
+      if (e.is_regular_file()) files.push_back(e.path());
+    if (ec) return fail(Status::BadArgument, "camera emulator: cannot list " + options.imagesFolder + ": " + ec.message());
+    std::sort(files.begin(), files.end());
+    for (const auto& f : files) {
+      cv::Mat img = cv::imread(f.string(), cv::IMREAD_ANYDEPTH | cv::IMREAD_GRAYSCALE);
+      if (img.empty()) continue;  // not an image
+      if (img.depth() != CV_8U && img.depth() != CV_16U)
+        return fail(Status::BadArgument, "camera emulator: " + f.string() + ": only 8- and 16-bit images are served");
+      if (!images.empty() && img.size() != images.front().size())
+        return fail(Status::BadArgument, "camera emulator: " + f.string() + " is " + std::to_string(img.cols) + "x" +
+                                             std::to_string(img.rows) + ", the folder's first image is " +
+                                             std::to_string(images.front().cols) + "x" + std::to_string(images.front().rows));
+      images.push_back(img);
+    }
+    if (images.empty()) return fail(Status::BadArgument, "camera emulator: no readable images in " + options.imagesFolder);
+    return {};
   }
 };
 
@@ -65,7 +127,33 @@ CameraEmulator::~CameraEmulator() {
 
 std::uint64_t CameraEmulator::framesServed() const { return impl_->served.load(); }
 
+bool CameraEmulator::pulseLine() {
+  if (!impl_->camera) return false;
+  std::lock_guard lock(impl_->lineMutex);
+  ArvFakeCamera* fake = arv_gv_fake_camera_get_fake_camera(impl_->camera);
+  guint32 mode = 0, source = 0;
+  arv_fake_camera_read_register(fake, ARV_FAKE_CAMERA_REGISTER_TRIGGER_MODE, &mode);
+  arv_fake_camera_read_register(fake, ARV_FAKE_CAMERA_REGISTER_TRIGGER_SOURCE, &source);
+  if (mode != 1 || source != 0) return false;  // not armed for Line0
+  // The fake camera only fires on its software-trigger register: route the edge through it
+  // for the moment the camera thread needs to see it (it polls at 1 kHz), then restore Line0.
+  arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_TRIGGER_SOURCE, 1);
+  arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_TRIGGER_SOFTWARE, 1);
+  for (int i = 0; i < 200; ++i) {
+    guint32 pending = 1;
+    arv_fake_camera_read_register(fake, ARV_FAKE_CAMERA_REGISTER_TRIGGER_SOFTWARE, &pending);
+    if (pending == 0) break;
+    std::this_thread::sleep_for(std::chrono::microseconds(500));
+  }
+  arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_TRIGGER_SOURCE, 0);
+  return true;
+}
+
 Result<void> CameraEmulator::start() {
+  const auto& o = impl_->options;
+  if (!(o.lossRatio >= 0.0 && o.lossRatio <= 1.0))
+    return fail(Status::BadArgument, "camera emulator: the packet loss ratio must be in [0, 1]");
+  if (!(o.fps > 0.0 && o.fps <= 1000.0)) return fail(Status::BadArgument, "camera emulator: fps must be in (0, 1000]");
   // Aravis' fake camera reports "running" even when its GVCP socket failed to bind
   // (PITFALLS.md): probe the port ourselves first.
   {
@@ -73,36 +161,53 @@ Result<void> CameraEmulator::start() {
     sockaddr_in sa{};
     sa.sin_family = AF_INET;
     sa.sin_port = htons(3956);
-    if (::inet_pton(AF_INET, impl_->options.address.c_str(), &sa.sin_addr) != 1) {
+    if (::inet_pton(AF_INET, o.address.c_str(), &sa.sin_addr) != 1) {
       ::close(fd);
-      return fail(Status::BadArgument, "camera emulator: '" + impl_->options.address + "' is not an IPv4 address");
+      return fail(Status::BadArgument, "camera emulator: '" + o.address + "' is not an IPv4 address");
     }
     const int rc = ::bind(fd, reinterpret_cast<sockaddr*>(&sa), sizeof sa);
     const int err = errno;
     ::close(fd);
+    if (rc != 0 && err == EADDRNOTAVAIL)
+      return fail(Status::CameraError, "camera emulator: " + o.address + " is not an address of this host (add it with "
+                                       "`ip addr add " + o.address + "/8 dev lo`)");
     if (rc != 0)
-      return fail(Status::CameraError, "camera emulator: cannot bind GVCP port " + impl_->options.address +
-                                           ":3956 (" + std::strerror(err) + "): another camera is serving there?");
+      return fail(Status::CameraError, "camera emulator: cannot bind GVCP port " + o.address + ":3956 (" +
+                                           std::strerror(err) + "): another camera is serving there?");
   }
-  if (!impl_->options.truthPath.empty()) {
-    impl_->truth = std::fopen(impl_->options.truthPath.c_str(), "a");
-    if (!impl_->truth) return fail(Status::BadArgument, "camera emulator: cannot open truth file " + impl_->options.truthPath);
+  if (!o.imagesFolder.empty()) {
+    if (auto r = impl_->loadImages(); !r) return r;
+    impl_->width = impl_->images.front().cols;
+    impl_->height = impl_->images.front().rows;
+  } else {
+    impl_->width = impl_->renderer.options().width;
+    impl_->height = impl_->renderer.options().height;
+  }
+  if (!o.truthPath.empty()) {
+    impl_->truth = std::fopen(o.truthPath.c_str(), "a");
+    if (!impl_->truth) return fail(Status::BadArgument, "camera emulator: cannot open truth file " + o.truthPath);
   }
 
-  impl_->camera = arv_gv_fake_camera_new(impl_->options.address.c_str(), impl_->options.serial.c_str());
+  impl_->camera = arv_gv_fake_camera_new(o.address.c_str(), o.serial.c_str());
   if (!impl_->camera || !arv_gv_fake_camera_is_running(impl_->camera))
-    return fail(Status::CameraError, "camera emulator: Aravis could not start a fake GigE camera on " + impl_->options.address);
+    return fail(Status::CameraError, "camera emulator: Aravis could not start a fake GigE camera on " + o.address);
+  // Aravis 0.8.26's fake GigE camera drops each GVSP packet with this probability.
+  g_object_set(impl_->camera, "gvsp-lost-ratio", o.lossRatio, nullptr);
   ArvFakeCamera* fake = arv_gv_fake_camera_get_fake_camera(impl_->camera);
   // The stock fake camera polls for software triggers at 25 Hz (40 ms latency): 1 kHz instead.
   arv_fake_camera_set_trigger_frequency(fake, 1000.0);
-  const auto w = static_cast<guint32>(impl_->renderer.options().width);
-  const auto h = static_cast<guint32>(impl_->renderer.options().height);
-  arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_SENSOR_WIDTH, std::max<guint32>(w, 2048));
-  arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_SENSOR_HEIGHT, std::max<guint32>(h, 2048));
+  const auto w = static_cast<guint32>(impl_->width);
+  const auto h = static_cast<guint32>(impl_->height);
+  // The sensor is the image: ROI width 0 ("rest of the sensor") is the whole scene.
+  arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_SENSOR_WIDTH, w);
+  arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_SENSOR_HEIGHT, h);
   arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_WIDTH, w);
   arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_HEIGHT, h);
+  arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_ACQUISITION_FRAME_PERIOD_US,
+                                 static_cast<guint32>(1e6 / o.fps));
   arv_fake_camera_set_fill_pattern(fake, &Impl::fill, impl_.get());
-  log::info("sim", "camera emulator {} serving {}x{} Mono8 on {}", impl_->options.serial, w, h, impl_->options.address);
+  log::info("sim", "camera emulator {} serving {}x{} {} on {} (packet loss {}, free-run {} fps)", o.serial, w, h,
+            o.imagesFolder.empty() ? "rendered scenes" : "images of " + o.imagesFolder, o.address, o.lossRatio, o.fps);
   return {};
 }
 

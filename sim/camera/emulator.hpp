@@ -1,6 +1,10 @@
 // A GigE Vision camera on a loopback address, built on libaravis' own fake GigE camera
-// (arv_gv_fake_camera_new), serving frames from the SceneRenderer over the real GVCP/GVSP
-// protocol. Frames are rendered on Aravis' camera thread in the fill-pattern callback.
+// (arv_gv_fake_camera_new), serving frames over the real GVCP/GVSP protocol: rendered
+// scenes (SceneRenderer, ground truth known to tests) or the images of a folder. Frames
+// are produced on Aravis' camera thread in the fill-pattern callback. Mono8, Mono16 and
+// the Bayer8 formats (a gray scene is its own Bayer mosaic), ROI offsets honoured.
+// Limits of Aravis 0.8.26's fake camera: no packet resend (a lost packet is a lost frame),
+// trigger sources Line0 and Software only, no TriggerDelay.
 #pragma once
 
 #include <cstdint>
@@ -16,6 +20,9 @@ struct EmulatorOptions {
   std::string address = "127.0.0.1";  // interface address the camera answers on (GVCP port 3956)
   std::string serial = "VGR-SIM-0";
   std::string truthPath;              // if set: one JSON line of ground truth per served frame
+  std::string imagesFolder;           // if set: serve these images (name order, looping) instead of scenes
+  double lossRatio = 0.0;             // [0, 1]: probability that each GVSP packet is dropped
+  double fps = 25.0;                  // free-run frame rate (AcquisitionFrameRate default), (0, 1000]
 };
 
 class CameraEmulator {
@@ -25,9 +32,14 @@ class CameraEmulator {
   CameraEmulator(const CameraEmulator&) = delete;
   CameraEmulator& operator=(const CameraEmulator&) = delete;
 
-  // Checks that the GVCP port is free (Aravis would fail silently), starts the camera.
+  // Checks that the GVCP port is free (Aravis would fail silently), loads the image folder
+  // if any, starts the camera.
   Result<void> start();
   std::uint64_t framesServed() const;
+  // Simulated hardware trigger: one edge on Line0. Fires a frame if the client configured
+  // TriggerMode=On, TriggerSource=Line0; otherwise ignored (as a real camera). Returns
+  // whether the camera was armed for it. Any thread.
+  bool pulseLine();
 
  private:
   struct Impl;

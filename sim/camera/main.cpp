@@ -1,9 +1,13 @@
-// vgr-sim-camera: a GigE Vision camera on loopback serving rendered scenes with known
-// ground truth. With no arguments it serves the camera of the embedded example cell
-// (config/examples/sim-cell.yaml): address 127.0.0.1, serial VGR-SIM-0, seed 1.
+// vgr-sim-camera: GigE Vision cameras on loopback serving rendered scenes with known ground
+// truth (or the images of a folder). With no arguments it serves the camera of the embedded
+// example cell (config/examples/sim-cell.yaml): address 127.0.0.1, serial VGR-SIM-0, seed 1.
+// Several cameras: --camera SERIAL@ADDRESS, repeated (one address each; camera i renders
+// with seed + i). SIGUSR1 = one edge on every camera's Line0 (simulated hardware trigger).
 #include <csignal>
 #include <cstdio>
+#include <memory>
 #include <thread>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
@@ -13,18 +17,29 @@
 
 namespace {
 volatile std::sig_atomic_t gStop = 0;
+volatile std::sig_atomic_t gPulses = 0;
 void onSignal(int) { gStop = 1; }
+void onPulse(int) { gPulses = gPulses + 1; }
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"vgr-sim-camera: GigE Vision camera emulator serving rendered scenes with ground truth"};
-  std::string configPath, address, serial, truthPath;
+  std::string configPath, address, serial, truthPath, imagesFolder;
+  std::vector<std::string> cameraSpecs;
   long long seed = -1;
+  int width = 0, height = 0;
+  double loss = 0.0, fps = 25.0;
   app.add_option("--config", configPath, "cell config whose camera and sim sections to serve (default: the embedded sim-cell.yaml)");
   app.add_option("--address", address, "IPv4 address to serve on (default: the config's camera.address)");
   app.add_option("--serial", serial, "serial number (default: the config's sim.serial)");
+  app.add_option("--camera", cameraSpecs, "SERIAL@ADDRESS of one more camera (repeatable; replaces --address/--serial)");
   app.add_option("--seed", seed, "scene seed (default: the config's sim.seed)");
-  app.add_option("--truth", truthPath, "append one JSON line of ground truth per served frame to this file");
+  app.add_option("--width", width, "sensor width in px (default: the config's sim.width)")->check(CLI::Range(64, 2448));
+  app.add_option("--height", height, "sensor height in px (default: the config's sim.height)")->check(CLI::Range(64, 2048));
+  app.add_option("--loss", loss, "probability that a GVSP packet is dropped, e.g. 1e-4")->check(CLI::Range(0.0, 1.0));
+  app.add_option("--fps", fps, "free-run frame rate")->check(CLI::Range(0.1, 1000.0));
+  app.add_option("--images", imagesFolder, "serve the images of this folder (name order, looping) instead of scenes");
+  app.add_option("--truth", truthPath, "append one JSON line of ground truth per served frame to this file (first camera)");
   CLI11_PARSE(app, argc, argv);
 
   auto cfg = configPath.empty() ? vgr::config::parseCellConfig(vgr::config::embeddedSimCellYaml(), "<embedded sim-cell.yaml>")
@@ -34,22 +49,58 @@ int main(int argc, char** argv) {
     return 2;
   }
   if (seed >= 0) cfg->sim.seed = static_cast<std::uint64_t>(seed);
-  vgr::sim::EmulatorOptions opts;
-  opts.address = address.empty() ? (cfg->camera.address.empty() ? "127.0.0.1" : cfg->camera.address) : address;
-  opts.serial = serial.empty() ? cfg->sim.serial : serial;
-  opts.truthPath = truthPath;
+  if (width > 0) cfg->sim.width = width;
+  if (height > 0) cfg->sim.height = height;
 
-  vgr::sim::CameraEmulator emulator(vgr::sim::SceneRenderer::fromCellConfig(*cfg), opts);
-  if (auto r = emulator.start(); !r) {
-    std::fprintf(stderr, "vgr-sim-camera: %s\n", r.error().message.c_str());
-    return 1;
+  std::vector<vgr::sim::EmulatorOptions> cams;
+  if (cameraSpecs.empty()) {
+    vgr::sim::EmulatorOptions o;
+    o.address = address.empty() ? (cfg->camera.address.empty() ? "127.0.0.1" : cfg->camera.address) : address;
+    o.serial = serial.empty() ? cfg->sim.serial : serial;
+    cams.push_back(o);
+  }
+  for (const auto& spec : cameraSpecs) {
+    const auto at = spec.find('@');
+    if (at == std::string::npos || at == 0 || at + 1 == spec.size()) {
+      std::fprintf(stderr, "vgr-sim-camera: --camera '%s': expected SERIAL@ADDRESS\n", spec.c_str());
+      return 2;
+    }
+    vgr::sim::EmulatorOptions o;
+    o.serial = spec.substr(0, at);
+    o.address = spec.substr(at + 1);
+    cams.push_back(o);
+  }
+
+  std::vector<std::unique_ptr<vgr::sim::CameraEmulator>> emulators;
+  for (std::size_t i = 0; i < cams.size(); ++i) {
+    auto& o = cams[i];
+    o.lossRatio = loss;
+    o.fps = fps;
+    o.imagesFolder = imagesFolder;
+    if (i == 0) o.truthPath = truthPath;
+    auto cell = *cfg;
+    cell.sim.seed = cfg->sim.seed + i;
+    emulators.push_back(std::make_unique<vgr::sim::CameraEmulator>(vgr::sim::SceneRenderer::fromCellConfig(cell), o));
+    if (auto r = emulators.back()->start(); !r) {
+      std::fprintf(stderr, "vgr-sim-camera: %s\n", r.error().message.c_str());
+      return 1;
+    }
   }
   std::signal(SIGTERM, onSignal);
   std::signal(SIGINT, onSignal);
-  std::printf("{\"event\":\"ready\",\"address\":\"%s\",\"serial\":\"%s\",\"seed\":%llu}\n", opts.address.c_str(),
-              opts.serial.c_str(), static_cast<unsigned long long>(cfg->sim.seed));
+  std::signal(SIGUSR1, onPulse);
+  std::printf("{\"event\":\"ready\",\"address\":\"%s\",\"serial\":\"%s\",\"seed\":%llu,\"cameras\":%zu}\n",
+              cams[0].address.c_str(), cams[0].serial.c_str(), static_cast<unsigned long long>(cfg->sim.seed), cams.size());
   std::fflush(stdout);
-  while (!gStop) std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  vgr::log::info("sim", "camera emulator stopping after {} frames", emulator.framesServed());
+  int handled = 0;
+  while (!gStop) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    while (handled != gPulses) {
+      ++handled;
+      for (auto& e : emulators) e->pulseLine();
+    }
+  }
+  for (std::size_t i = 0; i < emulators.size(); ++i)
+    vgr::log::info("sim", "camera emulator {} stopping after {} frames", cams[i].serial, emulators[i]->framesServed());
   return 0;
 }

@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <cstdio>
@@ -24,6 +25,7 @@
 #include <mutex>
 #include <optional>
 #include <regex>
+#include <set>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -161,6 +163,30 @@ try:
         wait(lambda s: s & 0x08, "RESULT_VALID")
         w(0, 0x02 | 0x04)  # RESULT_ACK + CLEAR_ERROR
         wait(lambda s: not s & 0x08, "RESULT_VALID cleared")
+        regs = read_ir(16, 2)
+        out["cleared_status"] = regs[0]
+        out["cleared_code"] = signed(regs[1])
+        w(0, 0x00)
+    elif mode == "counter":
+        # Counter mode: no CONTROL bits at all; each new TRIGGER_ID value is a trigger.
+        wait(lambda s: s & 0x01 and not s & 0x04, "READY")
+        w(1, job)
+        out["results"] = []
+        for n in (1, 2, 3):
+            w(2, n)
+            s = wait(lambda s: s & 0x08 and not s & 0x04, "RESULT_VALID")
+            regs = read_ir(16, 4)
+            d = BinaryPayloadDecoder.fromRegisters(read_ir(24, 2), byteorder=Endian.Big, wordorder=Endian.Big)
+            out["results"].append({"status": regs[0], "code": signed(regs[1]), "acq_id": regs[2],
+                                   "result_id": regs[3], "x": d.decode_32bit_float()})
+        # Two increments back to back: the second arrives while BUSY -> OVERRUN, -3.
+        w(2, 4)
+        w(2, 5)
+        regs = read_ir(16, 2)
+        out["overrun_status"] = regs[0]
+        out["overrun_code"] = signed(regs[1])
+        wait(lambda s: s & 0x08, "RESULT_VALID after overrun")
+        w(0, 0x04)  # CLEAR_ERROR
         regs = read_ir(16, 2)
         out["cleared_status"] = regs[0]
         out["cleared_code"] = signed(regs[1])
@@ -372,6 +398,21 @@ struct RawSocket {
       if (n <= 0) return std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - t0).count();
     }
   }
+  // What arrives within `timeout` (one reply; stops once 100 ms pass without data).
+  std::string recvSome(std::chrono::milliseconds timeout) const {
+    std::string out;
+    const auto end = Clock::now() + timeout;
+    while (Clock::now() < end) {
+      pollfd p{fd, POLLIN, 0};
+      const int wait = out.empty() ? static_cast<int>(std::chrono::duration_cast<std::chrono::milliseconds>(end - Clock::now()).count()) : 100;
+      if (::poll(&p, 1, wait) <= 0) break;
+      std::array<char, 512> buf{};
+      const auto n = ::recv(fd, buf.data(), buf.size(), 0);
+      if (n <= 0) break;
+      out.append(buf.data(), static_cast<std::size_t>(n));
+    }
+    return out;
+  }
   int fd;
   bool connected = false;
 };
@@ -577,6 +618,154 @@ TEST_F(modbus_server, RefusedTriggerAnswersWithBusyOverrun) {
   EXPECT_NE(regs[0] & kStatusError, 0);
   EXPECT_EQ(regs[0] & kStatusBusy, 0);
   EXPECT_EQ(asInt16(regs[1]), -3);
+}
+
+TEST_F(modbus_server, PymodbusCounterModeOverrunAndClearError) {
+  startServer(150ms);
+  const auto out = runPymodbus(port_, "counter", 2);
+  ASSERT_TRUE(out.value("ok", false)) << out.dump();
+  // Three counter triggers, three distinct results, each RESULT_ID = the ACQ_ID it served;
+  // then 4 accepted and 5 refused as an overrun.
+  EXPECT_EQ(daemon_->jobs(), (std::vector<int>{2, 2, 2, 2}));
+  const auto& results = out["results"];
+  ASSERT_EQ(results.size(), 3u);
+  for (std::size_t n = 0; n < 3; ++n) {
+    const auto& r = results[n];
+    const int expected = static_cast<int>((FakeDaemon::kFirstCycle + n) & 0xFFFF);
+    EXPECT_EQ(r["acq_id"].get<int>(), expected) << r.dump();
+    EXPECT_EQ(r["result_id"].get<int>(), expected) << r.dump();
+    EXPECT_EQ(r["code"].get<int>(), 0);
+    EXPECT_EQ(r["status"].get<int>() & (kStatusTriggerAck | kStatusBusy), 0) << "ACK cleared with the result";
+    EXPECT_NEAR(r["x"].get<double>(), 512.3, 1e-3);
+  }
+  const int s = out["overrun_status"].get<int>();
+  EXPECT_NE(s & kStatusOverrun, 0);
+  EXPECT_NE(s & kStatusBusy, 0);
+  EXPECT_EQ(out["overrun_code"].get<int>(), -3);
+  EXPECT_EQ(out["cleared_status"].get<int>() & (kStatusOverrun | kStatusError), 0);
+  EXPECT_EQ(out["cleared_code"].get<int>(), 0);
+}
+
+TEST_F(modbus_server, MbpollCounterModeTriggers) {
+  startServer();
+  for (int n = 1; n <= 2; ++n) {
+    const auto w = runCommand(mbpoll(port_, "-r 2 -t 4 127.0.0.1 " + std::to_string(n)) + " 2>&1");
+    ASSERT_EQ(w.exitCode, 0) << w.out;
+    ASSERT_TRUE(waitStatus(kStatusResultValid, true)) << "status " << status();
+    ASSERT_TRUE(waitStatus(kStatusBusy, false));
+    EXPECT_EQ(server_->holdingRegister(kResultId), (FakeDaemon::kFirstCycle + static_cast<unsigned>(n - 1)) & 0xFFFF);
+    EXPECT_EQ(status() & kStatusTriggerAck, 0);
+  }
+  // Writing the same counter value again is not a trigger.
+  const auto w = runCommand(mbpoll(port_, "-r 2 -t 4 127.0.0.1 2") + " 2>&1");
+  ASSERT_EQ(w.exitCode, 0) << w.out;
+  std::this_thread::sleep_for(50ms);
+  EXPECT_EQ(daemon_->jobs().size(), 2u);
+}
+
+TEST_F(modbus_server, RequiredTriggerEnableWithMbpoll) {
+  ModbusOptions o;
+  o.requireTriggerEnable = true;
+  startServer(20ms, o);
+  auto w = runCommand(mbpoll(port_, "-r 0 -t 4 127.0.0.1 1") + " 2>&1");  // TRIGGER without b3
+  ASSERT_EQ(w.exitCode, 0) << w.out;
+  std::this_thread::sleep_for(50ms);
+  EXPECT_TRUE(daemon_->jobs().empty());
+  EXPECT_EQ(status() & (kStatusTriggerAck | kStatusBusy | kStatusResultValid), 0);
+  w = runCommand(mbpoll(port_, "-r 0 -t 4 127.0.0.1 0") + " 2>&1");
+  ASSERT_EQ(w.exitCode, 0) << w.out;
+  w = runCommand(mbpoll(port_, "-r 0 -t 4 127.0.0.1 9") + " 2>&1");  // TRIGGER | TRIGGER_ENABLE
+  ASSERT_EQ(w.exitCode, 0) << w.out;
+  ASSERT_TRUE(waitStatus(kStatusResultValid, true)) << "status " << status();
+  EXPECT_EQ(daemon_->jobs().size(), 1u);
+}
+
+// The result deadline backstop: a daemon that never publishes still ends the PLC's cycle
+// with RESULT_VALID and -5 at the deadline.
+TEST_F(modbus_server, ResultDeadlineAnswersWhenTheDaemonNeverPublishes) {
+  ModbusOptions o;
+  o.resultDeadline = 300ms;
+  startServer(20ms, o);
+  daemon_->setPublish(false);
+  LibmodbusClient c(port_);
+  ASSERT_TRUE(c.connected);
+  const auto t0 = Clock::now();
+  ASSERT_EQ(modbus_write_register(c.ctx, kControl, kControlTrigger), 1);
+  std::array<std::uint16_t, 4> regs{};
+  bool valid = false;
+  while (!valid && Clock::now() - t0 < 2s) {
+    ASSERT_EQ(modbus_read_input_registers(c.ctx, kStatus, 4, regs.data()), 4);
+    valid = (regs[0] & kStatusResultValid) != 0;
+    if (!valid) std::this_thread::sleep_for(1ms);
+  }
+  const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - t0).count();
+  ASSERT_TRUE(valid);
+  EXPECT_GE(ms, 290);
+  EXPECT_LT(ms, 450);
+  EXPECT_EQ(asInt16(regs[1]), -5);
+  EXPECT_EQ(regs[3], FakeDaemon::kFirstCycle & 0xFFFF);
+  EXPECT_EQ(regs[0] & kStatusBusy, 0);
+}
+
+// libmodbus 3.1.6 sleeps its response timeout (500 ms by default) before answering some
+// invalid requests; the server must answer at once (found by fuzz_modbus_adu).
+TEST_F(modbus_server, InvalidRequestIsAnsweredAtOnce) {
+  startServer();
+  RawSocket raw(port_);
+  ASSERT_TRUE(raw.connected);
+  // FC03, address 16, count 0: exception 03 (illegal data value).
+  const auto t0 = Clock::now();
+  ASSERT_TRUE(raw.send(std::string("\x00\x07\x00\x00\x00\x06\x01\x03\x00\x10\x00\x00", 12)));
+  pollfd p{raw.fd, POLLIN, 0};
+  ASSERT_EQ(::poll(&p, 1, 1000), 1);
+  const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - t0).count();
+  const std::string reply = raw.recvSome(1000ms);
+  ASSERT_EQ(reply.size(), 9u);
+  EXPECT_EQ(static_cast<unsigned char>(reply[7]), 0x83);
+  EXPECT_EQ(static_cast<unsigned char>(reply[8]), 0x03);
+  EXPECT_LT(ms, 100);
+}
+
+// A reader never sees half a result: every result published carries the same number in
+// every result register, and a PLC reading 16..45 in one request must see one number.
+TEST_F(modbus_server, ReadsNeverSeeHalfAResult) {
+  startServer();
+  std::atomic<bool> done{false};
+  std::thread publisher([&] {
+    for (std::uint32_t n = 1; !done; ++n) {
+      ModbusResult r;
+      r.cycleId = n % 1000 + 1;
+      r.status = Status::Ok;
+      r.numFound = static_cast<int>(n % 1000);
+      const double v = static_cast<double>(n % 1000);
+      r.x = r.y = r.z = r.r1 = r.r2 = r.r3 = v;
+      r.score = v / 1000.0;
+      r.jobId = static_cast<int>(n % 1000);
+      server_->publishResult(r);
+    }
+  });
+  LibmodbusClient c(port_);
+  ASSERT_TRUE(c.connected);
+  int torn = 0, reads = 0;
+  std::set<int> seen;
+  const auto end = Clock::now() + 1500ms;
+  while (Clock::now() < end) {
+    std::array<std::uint16_t, 30> regs{};
+    if (modbus_read_input_registers(c.ctx, kStatus, 30, regs.data()) != 30) break;
+    ++reads;
+    auto reg = [&](std::uint16_t a) { return regs[a - kStatus]; };
+    const int n = reg(kNumFound);
+    seen.insert(n);
+    bool same = reg(kCurrentJob) == n && reg(kResultId) == n + 1;
+    for (const auto a : {kX, kY, kZ, kR1, kR2, kR3}) same = same && unpackFloat(reg(a), reg(a + 1), WordOrder::HighWordFirst) == static_cast<float>(n);
+    for (const auto a : {kXInt, kYInt, kZInt}) same = same && reg(a) == toInt16Register(n, 10.0);
+    if (!same) ++torn;
+  }
+  done = true;
+  publisher.join();
+  EXPECT_GT(reads, 500);
+  EXPECT_GT(seen.size(), 50u) << "the results did change under the reader";
+  EXPECT_EQ(torn, 0) << "of " << reads << " reads";
 }
 
 // A handler that (against the contract) publishes synchronously must not dead-lock: the

@@ -60,12 +60,31 @@ std::string urStatus(int status) {
 }
 std::string abbStatus(int status) { return fmt::format("{},0,0.000,0.000,0.000,0.000,0.000,0.000", status); }
 
+RobotEndpoint endpoint(std::string name, Dialect dialect, std::string bind, std::uint16_t port, std::size_t maxClients) {
+  RobotEndpoint ep;
+  ep.name = std::move(name);
+  ep.dialect = dialect;
+  ep.bind = std::move(bind);
+  ep.port = port;
+  ep.maxClients = maxClients;
+  return ep;
+}
+
 // A blocking TCP client with timeouts, like a robot program's socket.
 class RawClient {
  public:
-  explicit RawClient(std::uint16_t port) {
+  explicit RawClient(std::uint16_t port, const char* from = nullptr) {
     fd_ = ::socket(AF_INET, SOCK_STREAM, 0);
     if (fd_ < 0) throw std::runtime_error("socket() failed");
+    if (from != nullptr) {  // another loopback address (all of 127/8 is local on Linux)
+      sockaddr_in src{};
+      src.sin_family = AF_INET;
+      ::inet_pton(AF_INET, from, &src.sin_addr);
+      if (::bind(fd_, reinterpret_cast<const sockaddr*>(&src), sizeof src) != 0) {
+        ::close(fd_);
+        throw std::runtime_error("bind() failed");
+      }
+    }
     sockaddr_in addr{};
     addr.sin_family = AF_INET;
     addr.sin_port = htons(port);
@@ -174,8 +193,8 @@ class RawClient {
 class RobotServerFixture : public ::testing::Test {
  protected:
   void SetUp() override {
-    ur_ = std::make_unique<RobotServer>(io_, RobotEndpoint{"ur-cell1", Dialect::Ur, "127.0.0.1", 0, 8}, handler());
-    abb_ = std::make_unique<RobotServer>(io_, RobotEndpoint{"abb-cell1", Dialect::Abb, "127.0.0.1", 0, 8}, handler());
+    ur_ = std::make_unique<RobotServer>(io_, endpoint("ur-cell1", Dialect::Ur, "127.0.0.1", 0, 8), handler());
+    abb_ = std::make_unique<RobotServer>(io_, endpoint("abb-cell1", Dialect::Abb, "127.0.0.1", 0, 8), handler());
     ASSERT_TRUE(ur_->start());
     ASSERT_TRUE(abb_->start());
     ASSERT_NE(ur_->port(), 0);
@@ -446,11 +465,11 @@ TEST_F(robot_server, IdleConnectionIsKept) {
   EXPECT_EQ(c.readOnce(80), abbOk(1));
 }
 
-TEST_F(robot_server, MaxClientsRefusesTheExtraConnectionOnly) {
+TEST_F(robot_server, MaxClientsReplacesTheSameRobotsStaleConnectionAndRefusesOthers) {
   std::uint16_t port = 0;
   onIo([&] {
     extra_.push_back(
-        std::make_unique<RobotServer>(io_, RobotEndpoint{"ur-one", Dialect::Ur, "127.0.0.1", 0, 1}, handler()));
+        std::make_unique<RobotServer>(io_, endpoint("ur-one", Dialect::Ur, "127.0.0.1", 0, 1), handler()));
     ASSERT_TRUE(extra_.back()->start());
     port = extra_.back()->port();
   });
@@ -458,17 +477,75 @@ TEST_F(robot_server, MaxClientsRefusesTheExtraConnectionOnly) {
   RawClient first(port);
   ASSERT_TRUE(first.send("GET,1\n"));
   EXPECT_EQ(first.readUntil(')'), urOk(1));
-  RawClient second(port);
-  EXPECT_TRUE(second.waitClosed());
+  // Another address while full: refused, the robot's connection stays.
+  RawClient stranger(port, "127.0.0.2");
+  EXPECT_TRUE(stranger.waitClosed());
   ASSERT_TRUE(first.send("GET,1\n"));
   EXPECT_EQ(first.readUntil(')'), urOk(1));
+  // The same robot (address) again, e.g. after its controller rebooted: the new
+  // connection replaces the stale one.
+  RawClient second(port);
+  EXPECT_TRUE(first.waitClosed());
+  ASSERT_TRUE(second.send("GET,1\n"));
+  EXPECT_EQ(second.readUntil(')'), urOk(1));
+  EXPECT_EQ(clients(*extra_.back()), 1u);
+}
+
+TEST_F(robot_server, AllowedClientsOnly) {
+  std::uint16_t port = 0;
+  onIo([&] {
+    RobotEndpoint ep = endpoint("abb-acl", Dialect::Abb, "0.0.0.0", 0, 8);
+    ep.allowedClients = {"127.0.0.3"};
+    extra_.push_back(std::make_unique<RobotServer>(io_, ep, handler()));
+    ASSERT_TRUE(extra_.back()->start());
+    port = extra_.back()->port();
+  });
+  RawClient denied(port);  // from 127.0.0.1
+  EXPECT_TRUE(denied.waitClosed());
+  RawClient allowed(port, "127.0.0.3");
+  ASSERT_TRUE(allowed.send("GET,1#"));
+  EXPECT_EQ(allowed.readOnce(80), abbOk(1));
+
+  // A bad address in the list is a start error naming it.
+  Result<void> res;
+  onIo([&] {
+    RobotEndpoint ep = endpoint("abb-bad-acl", Dialect::Abb, "127.0.0.1", 0, 8);
+    ep.allowedClients = {"robot.local"};
+    RobotServer s(io_, ep, handler());
+    res = s.start();
+  });
+  ASSERT_FALSE(res);
+  EXPECT_NE(res.error().message.find("'robot.local' is not an IP address"), std::string::npos) << res.error().message;
+}
+
+TEST_F(robot_server, KeepaliveIsOnForEveryConnection) {
+  // The kernel's view of the server side of the connection (iproute2's ss): a keepalive
+  // timer runs on it, armed for the 10 s idle time of docs/protocols.md.
+  RawClient c(ur_->port());
+  ASSERT_TRUE(c.send("GET,1\n"));
+  EXPECT_EQ(c.readUntil(')'), urOk(1));
+  const std::string cmd = fmt::format("ss -tnoH state established '( sport = :{} )' 2>&1", ur_->port());
+  FILE* p = ::popen(cmd.c_str(), "r");
+  ASSERT_NE(p, nullptr);
+  std::string out;
+  char buf[512];
+  while (std::fgets(buf, sizeof buf, p)) out += buf;
+  ::pclose(p);
+  std::smatch m;
+  // iproute2 6.1 prints the time left as "9.988ms" for 9.988 s (checked against
+  // TCP_KEEPIDLE = 10 s right after connecting); older versions print "9.988sec". Read the
+  // number either way: it must be the 10 s idle time minus the few ms since connect.
+  ASSERT_TRUE(std::regex_search(out, m, std::regex(R"(timer:\(keepalive,([0-9.]+)(ms|sec))"))) << out;
+  const double left = std::stod(m[1].str());
+  EXPECT_GT(left, 5.0) << out;
+  EXPECT_LE(left, 10.0) << out;
 }
 
 TEST_F(robot_server, StartFailureNamesEndpointAddressAndPort) {
   const std::uint16_t busy = ur_->port();
   Result<void> res;
   onIo([&] {
-    RobotServer clash(io_, RobotEndpoint{"ur-clash", Dialect::Ur, "127.0.0.1", busy, 8}, handler());
+    RobotServer clash(io_, endpoint("ur-clash", Dialect::Ur, "127.0.0.1", busy, 8), handler());
     res = clash.start();
   });
   ASSERT_FALSE(res);

@@ -209,6 +209,79 @@ TEST_F(modbus_map, TriggerEnableIsNotRequired) {
   EXPECT_TRUE(writeHr(kControl, kControlTrigger | kControlTriggerEnable).triggerAccepted);
 }
 
+TEST_F(modbus_map, RequiredTriggerEnableGatesLevelAndCounterTriggers) {
+  map.setRequireTriggerEnable(true);
+  map.setReady(true);
+  // Without b3: ignored, no ACK, no cycle.
+  auto ev = writeHr(kControl, kControlTrigger);
+  EXPECT_TRUE(ev.ignoredNotEnabled);
+  EXPECT_FALSE(ev.triggerAccepted);
+  EXPECT_FALSE(bit(kStatusTriggerAck));
+  EXPECT_TRUE(daemon.jobs.empty());
+  // Raising b3 while TRIGGER is held is not an edge.
+  EXPECT_FALSE(writeHr(kControl, kControlTrigger | kControlTriggerEnable).triggerAccepted);
+  EXPECT_TRUE(daemon.jobs.empty());
+  // Enable + a fresh edge (in the same write as the enable works too).
+  writeHr(kControl, 0);
+  EXPECT_TRUE(writeHr(kControl, kControlTrigger | kControlTriggerEnable).triggerAccepted);
+  writeHr(kControl, kControlTriggerEnable);
+  map.publishResult(okResult(70000));
+  // Counter mode obeys it as well; the consumed counter value does not fire later.
+  writeHr(kControl, 0);
+  EXPECT_TRUE(writeHr(kTriggerId, 1).ignoredNotEnabled);
+  EXPECT_FALSE(writeHr(kControl, kControlTriggerEnable).triggerAccepted);
+  EXPECT_TRUE(writeHr(kTriggerId, 2).triggerAccepted);
+  EXPECT_EQ(daemon.jobs.size(), 2u);
+  // A trigger without enable while BUSY is ignored, not an overrun.
+  writeHr(kControl, 0);
+  EXPECT_FALSE(writeHr(kTriggerId, 3).overrun);
+  EXPECT_FALSE(bit(kStatusOverrun));
+}
+
+TEST_F(modbus_map, ResultDeadlineAnswersAHungCycleAndDropsItsLateResult) {
+  using namespace std::chrono_literals;
+  map.setResultDeadline(1600ms);
+  map.setReady(true);
+  const auto t0 = ModbusMap::Clock::now();
+  writeHr(kJobId, 4);
+  map.holdingRegisters()[kControl] = kControlTrigger;
+  ASSERT_TRUE(map.onHoldingWritten(daemon.fn(), t0).triggerAccepted);
+  ASSERT_TRUE(map.busyDeadline().has_value());
+  EXPECT_EQ(*map.busyDeadline(), t0 + 1600ms);
+  EXPECT_EQ(map.expireOverdue(t0 + 1599ms), 0u);
+  EXPECT_TRUE(bit(kStatusBusy));
+  EXPECT_EQ(map.expireOverdue(t0 + 1600ms), 70000u);
+  EXPECT_FALSE(bit(kStatusBusy));
+  EXPECT_TRUE(bit(kStatusResultValid));
+  EXPECT_TRUE(bit(kStatusError));
+  EXPECT_EQ(asInt16(map.input(kErrorCode)), -5);
+  EXPECT_EQ(map.input(kResultId), 70000u & 0xFFFFu);
+  EXPECT_EQ(map.input(kCurrentJob), 4);
+  EXPECT_FALSE(map.busyDeadline().has_value());
+  EXPECT_EQ(map.expireOverdue(t0 + 5000ms), 0u);  // once
+  expectMirrored();
+
+  // The next cycle starts; the hung cycle's late result must not end it.
+  writeHr(kControl, 0);
+  writeHr(kControl, kControlResultAck | kControlClearError);
+  writeHr(kControl, 0);
+  EXPECT_TRUE(writeHr(kControl, kControlTrigger).triggerAccepted);
+  EXPECT_FALSE(map.publishResult(okResult(70000)));
+  EXPECT_TRUE(bit(kStatusBusy));
+  EXPECT_FALSE(bit(kStatusResultValid));
+  EXPECT_TRUE(map.publishResult(okResult(70001)));
+  EXPECT_EQ(map.input(kResultId), 70001u & 0xFFFFu);
+  EXPECT_EQ(map.input(kErrorCode), 0);
+}
+
+TEST_F(modbus_map, NoResultDeadlineByDefault) {
+  map.setReady(true);
+  writeHr(kControl, kControlTrigger);
+  EXPECT_FALSE(map.busyDeadline().has_value());
+  EXPECT_EQ(map.expireOverdue(ModbusMap::Clock::now() + std::chrono::hours(1)), 0u);
+  EXPECT_TRUE(bit(kStatusBusy));
+}
+
 TEST_F(modbus_map, TriggerWhileNotReadyIsIgnored) {
   map.setReady(false);
   const auto ev = writeHr(kControl, kControlTrigger);

@@ -75,8 +75,13 @@ TEST(robot_codec, ParseDialect) {
   EXPECT_EQ(parseDialect("ur"), Dialect::Ur);
   EXPECT_EQ(parseDialect("abb"), Dialect::Abb);
   EXPECT_EQ(parseDialect("UR"), std::nullopt);
-  EXPECT_EQ(parseDialect("fanuc"), std::nullopt);
+  EXPECT_EQ(parseDialect("fanuc"), Dialect::Fanuc);
+  EXPECT_EQ(parseDialect("binary"), Dialect::Binary);
+  EXPECT_EQ(parseDialect("strict"), Dialect::Strict);
+  EXPECT_EQ(parseDialect("kuka"), std::nullopt);
   EXPECT_EQ(parseDialect(""), std::nullopt);
+  for (Dialect d : {Dialect::Ur, Dialect::Abb, Dialect::Fanuc, Dialect::Binary, Dialect::Strict})
+    EXPECT_EQ(parseDialect(dialectName(d)), d);
   EXPECT_EQ(dialectName(Dialect::Ur), "ur");
   EXPECT_EQ(dialectName(Dialect::Abb), "abb");
 }
@@ -313,18 +318,30 @@ TEST(robot_codec, ParseGoodRequests) {
   r = parseRequest("GET,007");
   ASSERT_TRUE(r);
   EXPECT_EQ(r->job, 7);
+
+  r = parseRequest("GET");  // the robot's current job
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->command, Command::Get);
+  EXPECT_EQ(r->job, 0);
+  EXPECT_FALSE(r->last);
+
+  r = parseRequest("JOB,12");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->command, Command::Job);
+  EXPECT_EQ(r->job, 12);
 }
 
 TEST(robot_codec, ParseBadRequests) {
   const std::vector<std::string> unknown = {
-      "", "HELLO", "get,1", "Get,1", "GETX,1", "GET 1", "PUT,1", std::string("\x00\x01\xff", 3), "(GET,1)"};
+      "", "HELLO", "get,1", "Get,1", "job,1", "GETX,1", "GET 1", "PUT,1", std::string("\x00\x01\xff", 3), "(GET,1)"};
   for (const std::string& s : unknown) {
     const auto r = parseRequest(s);
     ASSERT_FALSE(r) << s;
     EXPECT_EQ(r.error().code, Status::UnknownCommand) << s;
     EXPECT_EQ(statusCode(r.error().code), -1);
   }
-  const std::vector<std::string> badArg = {"GET",     "GET,",       "GET, ",     "GET,abc",         "GET,0",
+  const std::vector<std::string> badArg = {"JOB",     "JOB,0",      "JOB,1,LAST", "JOB,x",
+                                           "GET,",       "GET, ",     "GET,abc",         "GET,0",
                                            "GET,-1",  "GET,+1",     "GET,32768", "GET,99999999999", "GET,1.5",
                                            "GET,1 2", "GET,1,last", "GET,1,",    "GET,1,LAST,2",    "GET,,LAST",
                                            "GET,1x"};

@@ -1,0 +1,176 @@
+#include "daemon/grab.hpp"
+
+#include <arpa/inet.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <thread>
+#include <vector>
+
+#include "config/cell_config.hpp"
+#include "daemon/camera_worker.hpp"
+#include "drivers/aravis_camera.hpp"
+#include "drivers/camera.hpp"
+
+namespace vgr::daemon {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using std::chrono::milliseconds;
+
+bool isIpv4(const std::string& s) {
+  in_addr a{};
+  return ::inet_pton(AF_INET, s.c_str(), &a) == 1;
+}
+
+// Nearest-rank percentile of sorted values; 0 for none.
+double percentile(const std::vector<double>& sorted, double p) {
+  if (sorted.empty()) return 0.0;
+  const auto rank = static_cast<std::size_t>(std::ceil(p / 100.0 * static_cast<double>(sorted.size())));
+  return sorted[std::clamp<std::size_t>(rank, 1, sorted.size()) - 1];
+}
+
+}  // namespace
+
+int runGrab(const GrabOptions& o) {
+  config::CameraConfig cam;
+  int deadlineMs = 1500;
+  if (!o.configPath.empty()) {
+    auto cfg = config::loadCellConfig(o.configPath);
+    if (!cfg) {
+      std::fprintf(stderr, "vgr grab: %s\n", cfg.error().message.c_str());
+      return 2;
+    }
+    cam = cfg->camera;
+    deadlineMs = cfg->cycleDeadlineMs;
+  }
+  if (!o.camera.empty()) {
+    cam.address.clear();
+    cam.serial.clear();
+    cam.userName.clear();
+    if (isIpv4(o.camera)) {
+      cam.address = o.camera;
+    } else {
+      // A serial if discovery knows it, else a DeviceUserID.
+      bool isSerial = false;
+      for (const auto& d : drivers::discoverCameras()) isSerial = isSerial || d.serial == o.camera || d.id == o.camera;
+      (isSerial ? cam.serial : cam.userName) = o.camera;
+    }
+  }
+  if (cam.address.empty() && cam.serial.empty() && cam.userName.empty() && cam.driver == "aravis") {
+    std::fprintf(stderr, "vgr grab: which camera? give --camera ID or a --config with a camera section\n");
+    return 2;
+  }
+  if (!o.trigger.empty()) {
+    if (o.trigger == "software") cam.trigger = config::TriggerMode::Software;
+    else if (o.trigger == "hardware") cam.trigger = config::TriggerMode::Hardware;
+    else if (o.trigger == "free_run") cam.trigger = config::TriggerMode::FreeRun;
+    else {
+      std::fprintf(stderr, "vgr grab: --trigger: expected software, hardware or free_run, got '%s'\n", o.trigger.c_str());
+      return 2;
+    }
+  }
+  if (!o.pixelFormat.empty()) cam.pixelFormat = o.pixelFormat;
+  if (o.packetSize >= 0) cam.packetSize = o.packetSize;
+  if (o.retries >= 0) cam.retries = o.retries;
+  if (o.timeoutMs > 0) cam.timeoutMs = o.timeoutMs;
+  if (o.deadlineMs > 0) deadlineMs = o.deadlineMs;
+
+  auto made = drivers::makeCamera(cam);
+  if (!made) {
+    std::fprintf(stderr, "vgr grab: %s\n", made.error().message.c_str());
+    return 2;
+  }
+  // Open once in the foreground: a misconfigured camera is a clear error, not a retry loop.
+  if (auto r = (*made)->open(); !r) {
+    std::fprintf(stderr, "vgr grab: %s\n", r.error().message.c_str());
+    return 1;
+  }
+  (*made)->close();
+
+  CameraWorker worker(cam, std::move(*made));
+  worker.start();
+  if (!worker.waitStreaming(milliseconds(15000))) {
+    std::fprintf(stderr, "vgr grab: %s: not streaming after 15 s\n", worker.describe().c_str());
+    return 1;
+  }
+
+  drivers::Frame frame;
+  std::vector<double> latencies;
+  std::map<std::string, int> errors;
+  int ok = 0;
+  const auto runStart = Clock::now();
+  for (int i = 0; i < o.count; ++i) {
+    const auto t0 = Clock::now();
+    drivers::FrameStatus st = drivers::FrameStatus::Ok;
+    auto r = worker.grab(frame, t0 + milliseconds(deadlineMs), &st);
+    const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    if (r) {
+      ++ok;
+      latencies.push_back(ms);
+      if (!o.json)
+        std::printf("frame %d: id %llu %dx%d %d-bit, %.1f ms\n", i + 1, static_cast<unsigned long long>(frame.frameId),
+                    frame.width, frame.height, frame.bitDepth, ms);
+    } else {
+      errors[drivers::frameStatusName(st)]++;
+      if (!o.json) std::printf("frame %d: %s: %s\n", i + 1, drivers::frameStatusName(st), r.error().message.c_str());
+    }
+    if (o.intervalMs > 0) std::this_thread::sleep_for(milliseconds(o.intervalMs));
+  }
+  const double seconds = std::chrono::duration<double>(Clock::now() - runStart).count();
+  worker.stop();
+  const auto c = worker.counters();
+  std::sort(latencies.begin(), latencies.end());
+  const int errorCount = o.count - ok;
+  const double p50 = percentile(latencies, 50), p99 = percentile(latencies, 99);
+  if (o.json) {
+    std::string byStatus;
+    for (const auto& [k, v] : errors) {
+      if (!byStatus.empty()) byStatus += ',';
+      byStatus.append("\"").append(k).append("\":").append(std::to_string(v));
+    }
+    std::printf("{\"camera\":\"%s\",\"errors_by_status\":{%s},\"retries\":%llu,\"recovered\":%llu,\"reconnects\":%llu,"
+                "\"missing_packets\":%llu,\"underruns\":%llu,\"seconds\":%.3f,\"p90_ms\":%.3f,\"max_ms\":%.3f}\n",
+                worker.describe().c_str(), byStatus.c_str(), static_cast<unsigned long long>(c.retries),
+                static_cast<unsigned long long>(c.recovered), static_cast<unsigned long long>(c.reconnects),
+                static_cast<unsigned long long>(c.missingPackets), static_cast<unsigned long long>(c.underruns), seconds,
+                percentile(latencies, 90), latencies.empty() ? 0.0 : latencies.back());
+    std::printf("{\"frames\":%d,\"ok\":%d,\"errors\":%d,\"p50_ms\":%.3f,\"p99_ms\":%.3f}\n", o.count, ok, errorCount, p50, p99);
+  } else {
+    std::printf("%s: %d triggers, %d frames, %d errors", worker.describe().c_str(), o.count, ok, errorCount);
+    for (const auto& [k, v] : errors) std::printf(" (%s %d)", k.c_str(), v);
+    std::printf("; trigger->frame p50 %.1f ms, p99 %.1f ms; %llu re-triggers, %llu recovered, %llu missing packets\n", p50,
+                p99, static_cast<unsigned long long>(c.retries), static_cast<unsigned long long>(c.recovered),
+                static_cast<unsigned long long>(c.missingPackets));
+  }
+  std::fflush(stdout);
+  return 0;
+}
+
+int runCameras(bool json) {
+  const auto list = drivers::discoverCameras();
+  if (json) {
+    std::printf("[");
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      const auto& d = list[i];
+      std::printf("%s{\"serial\":\"%s\",\"model\":\"%s\",\"vendor\":\"%s\",\"address\":\"%s\",\"id\":\"%s\",\"protocol\":\"%s\"}",
+                  i ? "," : "", d.serial.c_str(), d.model.c_str(), d.vendor.c_str(), d.address.c_str(), d.id.c_str(),
+                  d.protocol.c_str());
+    }
+    std::printf("]\n");
+    return 0;
+  }
+  if (list.empty()) {
+    std::printf("no cameras found\n");
+    return 0;
+  }
+  std::printf("%-20s %-20s %-16s %-16s %s\n", "SERIAL", "MODEL", "VENDOR", "ADDRESS", "ID");
+  for (const auto& d : list)
+    std::printf("%-20s %-20s %-16s %-16s %s\n", d.serial.c_str(), d.model.c_str(), d.vendor.c_str(), d.address.c_str(), d.id.c_str());
+  return 0;
+}
+
+}  // namespace vgr::daemon

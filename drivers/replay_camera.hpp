@@ -1,0 +1,18 @@
+// The replay camera: serves the images of a folder (PNG, PGM/PNM, TIFF, BMP, JPEG; 8- or
+// 16-bit gray, colour converted to gray) in file-name order, looping or not, behind the
+// same Camera interface as a real camera, for offline work and tests (docs/cameras.md).
+// Software trigger: each trigger serves the next image at once. Hardware trigger: no line
+// exists, so a trigger waits its timeout and reports FrameStatus::Timeout. The folder
+// vanishing is a disconnected device; it comes back with open() once the folder is back.
+#pragma once
+
+#include <memory>
+
+#include "config/cell_config.hpp"
+#include "drivers/camera.hpp"
+
+namespace vgr::drivers {
+
+std::unique_ptr<Camera> makeReplayCamera(const config::CameraConfig& config);
+
+}  // namespace vgr::drivers

@@ -1,0 +1,71 @@
+// One Modbus TCP request as ModbusServer handles it, socket given by the caller: libmodbus
+// framing and reply logic plus the checks the server adds (MBAP header, the PLC's writable
+// area) and the handshake of protocol/modbus_map.hpp. Split out of the server so the
+// fuzzer (tests/fuzz/fuzz_modbus_adu.cpp) drives exactly this code path.
+//
+// Not thread-safe; one handler per server thread. handle() touches the map: the caller
+// serialises it with every other map access (ModbusServer holds its mutex).
+#pragma once
+
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+
+#include "protocol/modbus_map.hpp"
+
+namespace vgr::protocol {
+
+// MODBUS_TCP_MAX_ADU_LENGTH: MBAP header (7) + the largest PDU (253).
+inline constexpr std::size_t kModbusTcpMaxAdu = 260;
+using ModbusFrame = std::array<std::uint8_t, kModbusTcpMaxAdu>;
+
+// What the server does with a frame libmodbus has read, from the frame alone (pure).
+enum class FrameVerdict {
+  Serve,           // a valid request: libmodbus answers it (exceptions included)
+  RejectAddress,   // a write outside HR 0..15: exception 02, nothing written
+  Drop,            // protocol id != 0, MBAP length inconsistent, no function code
+};
+struct FrameCheck {
+  FrameVerdict verdict = FrameVerdict::Drop;
+  bool writes = false;  // the function writes holding registers (FC06, FC16, FC22, FC23)
+};
+FrameCheck checkFrame(std::span<const std::uint8_t> frame);
+
+class ModbusRequestHandler {
+ public:
+  // byteTimeout: longest gap between two bytes of one frame before the client is dropped.
+  explicit ModbusRequestHandler(std::chrono::microseconds byteTimeout = std::chrono::milliseconds(200));
+  ~ModbusRequestHandler();
+  ModbusRequestHandler(const ModbusRequestHandler&) = delete;
+  ModbusRequestHandler& operator=(const ModbusRequestHandler&) = delete;
+
+  bool valid() const;  // false when libmodbus could not allocate its context
+
+  // Reads one request frame from `fd` (blocks up to the byte timeout between bytes).
+  // Returns its length (> 0), 0 for a frame libmodbus ignores, or -1 (connection closed,
+  // stalled or unparsable; the reason in lastError()).
+  int receive(int fd, ModbusFrame& frame);
+
+  struct Outcome {
+    bool keep = true;        // false: close the connection (reason in dropReason)
+    std::string dropReason;
+    FrameCheck check;
+    HandshakeEvents events;  // when check.writes and the request was served
+  };
+  // Answers the first `length` bytes of `frame` (as receive() filled it; libmodbus reads
+  // the whole buffer, never past it) on `fd` and runs the handshake after writes. The
+  // caller holds the map's lock.
+  Outcome handle(int fd, const ModbusFrame& frame, int length, ModbusMap& map, const ModbusMap::TriggerFn& onTrigger);
+
+  const std::string& lastError() const { return lastError_; }
+
+ private:
+  struct Ctx;
+  std::unique_ptr<Ctx> ctx_;
+  std::string lastError_;
+};
+
+}  // namespace vgr::protocol

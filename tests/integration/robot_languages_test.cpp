@@ -1,0 +1,362 @@
+// The robot programs in examples/robot/ against a real vgrd robot server (RobotServer +
+// ResultStore on one I/O thread, raw TCP on loopback): the request each program sends is
+// read out of the program file, and the reply is parsed with a re-implementation of that
+// language's rules. The parsed values must give back the published pose, to the precision
+// of the language's number type (RAPID num and KAREL REAL are 32-bit floats).
+//   RAPID   : SocketReceive \Str (one receive, at most 80 characters), StrFind / StrPart /
+//             StrToVal as ParseReply in VgrPick.mod does.
+//   KAREL   : READ up to the line end into STRING[254]; SUB_STR at the columns written in
+//             vgr_bg.kl; CNV_STR_INT / CNV_STR_REAL.
+//   URScript: socket_read_ascii_float(n): "(v1,...,vn)" exactly, else [0].
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <future>
+#include <memory>
+#include <optional>
+#include <regex>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <boost/asio/executor_work_guard.hpp>
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/post.hpp>
+
+#include "daemon/result_store.hpp"
+#include "protocol/robot_server.hpp"
+
+namespace vgr::protocol {
+namespace {
+
+namespace asio = boost::asio;
+using namespace std::chrono_literals;
+using Clock = std::chrono::steady_clock;
+constexpr double kPi = 3.14159265358979323846;
+
+std::string example(const std::string& name) {
+  std::ifstream in(std::string(VGR_SOURCE_DIR) + "/examples/robot/" + name);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+class Socket {
+ public:
+  explicit Socket(std::uint16_t port) {
+    fd_ = ::socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in addr{};
+    addr.sin_family = AF_INET;
+    addr.sin_port = htons(port);
+    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    if (::connect(fd_, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) != 0) throw std::runtime_error("connect");
+  }
+  ~Socket() { ::close(fd_); }
+  Socket(const Socket&) = delete;
+  Socket& operator=(const Socket&) = delete;
+  void send(const std::string& s) { ASSERT_EQ(::send(fd_, s.data(), s.size(), MSG_NOSIGNAL), static_cast<ssize_t>(s.size())); }
+  // One recv of at most `max` bytes (what a single SocketReceive / read call returns).
+  std::string recvOnce(std::size_t max, std::chrono::milliseconds timeout = 3000ms) {
+    pollfd p{fd_, POLLIN, 0};
+    if (::poll(&p, 1, static_cast<int>(timeout.count())) <= 0) return {};
+    std::string buf(max, '\0');
+    const ssize_t n = ::recv(fd_, buf.data(), max, 0);
+    return n > 0 ? buf.substr(0, static_cast<std::size_t>(n)) : std::string();
+  }
+  // Byte by byte up to and including `stop` (or `limit` bytes).
+  std::string recvUntil(char stop, std::size_t limit) {
+    std::string out;
+    while (out.size() < limit) {
+      const std::string c = recvOnce(1);
+      if (c.empty()) break;
+      out += c;
+      if (c[0] == stop) break;
+    }
+    return out;
+  }
+
+ private:
+  int fd_ = -1;
+};
+
+// ---- RAPID -------------------------------------------------------------------------------
+
+// StrFind(Str, ChPos, Set): first position >= ChPos holding a character of Set, else
+// StrLen(Str) + 1 (1-based).
+int rapidStrFind(const std::string& s, int chPos, const std::string& set) {
+  for (int i = chPos; i <= static_cast<int>(s.size()); ++i)
+    if (set.find(s[static_cast<std::size_t>(i - 1)]) != std::string::npos) return i;
+  return static_cast<int>(s.size()) + 1;
+}
+std::string rapidStrPart(const std::string& s, int chPos, int len) {
+  return s.substr(static_cast<std::size_t>(chPos - 1), static_cast<std::size_t>(len));
+}
+// StrToVal into a num (32-bit float): a decimal number, optional '-', optional fraction.
+bool rapidStrToVal(const std::string& s, float& out) {
+  static const std::regex kNum(R"(-?\d+(\.\d+)?)");
+  if (!std::regex_match(s, kNum)) return false;
+  out = std::stof(s);
+  return true;
+}
+// ParseReply of VgrPick.mod.
+std::optional<std::vector<float>> rapidParseReply(const std::string& s) {
+  std::vector<float> vals(8);
+  int start = 1;
+  for (int i = 0; i < 8; ++i) {
+    const int comma = rapidStrFind(s, start, ",");
+    if (!rapidStrToVal(rapidStrPart(s, start, comma - start), vals[static_cast<std::size_t>(i)])) return std::nullopt;
+    start = comma + 1;
+  }
+  return vals;
+}
+
+// ---- KAREL -------------------------------------------------------------------------------
+
+// READ f(str) into STRING[254]: up to the line end (LF; a CR before it is dropped).
+std::optional<std::string> karelReadLine(Socket& s) {
+  std::string line = s.recvUntil('\n', 255);
+  if (line.empty() || line.back() != '\n') return std::nullopt;  // no line end within 254
+  line.pop_back();
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+  if (line.size() > 254) return std::nullopt;
+  return line;
+}
+std::string karelSubStr(const std::string& s, int start, int len) {
+  if (start < 1 || start > static_cast<int>(s.size())) return {};
+  return s.substr(static_cast<std::size_t>(start - 1), static_cast<std::size_t>(len));
+}
+// CNV_STR_INT / CNV_STR_REAL: optional sign, digits, (REAL) optional fraction; anything
+// else leaves the target uninitialised, which we report as nullopt.
+std::optional<long> karelCnvStrInt(const std::string& s) {
+  if (!std::regex_match(s, std::regex(R"([+-]?\d+)"))) return std::nullopt;
+  return std::stol(s);
+}
+std::optional<float> karelCnvStrReal(const std::string& s) {
+  if (!std::regex_match(s, std::regex(R"([+-]?\d+(\.\d+)?)"))) return std::nullopt;
+  return std::stof(s);
+}
+
+// ---- URScript ----------------------------------------------------------------------------
+
+// socket_read_ascii_float(n): reads up to ')' and returns [n, v1..vn] for exactly
+// "(v1,...,vn)", [0] otherwise.
+std::vector<double> urReadAsciiFloat(Socket& s, int n) {
+  const std::string raw = s.recvUntil(')', 1024);
+  static const std::regex kNum(R"(\s*[+-]?\d+(\.\d+)?\s*)");
+  if (raw.size() < 2 || raw.front() != '(' || raw.back() != ')') return {0};
+  std::vector<double> out{0};
+  std::string body = raw.substr(1, raw.size() - 2);
+  std::size_t pos = 0;
+  for (;;) {
+    const std::size_t comma = body.find(',', pos);
+    const std::string field = body.substr(pos, comma - pos);
+    if (!std::regex_match(field, kNum)) return {0};
+    out.push_back(std::stod(field));
+    if (comma == std::string::npos) break;
+    pos = comma + 1;
+  }
+  if (static_cast<int>(out.size()) - 1 != n || n > 30) return {0};
+  out[0] = n;
+  return out;
+}
+
+// ---- the server ------------------------------------------------------------------------
+
+class robot_languages : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    store_ = std::make_unique<daemon::ResultStore>(io_, std::set<int>{1});
+    for (Dialect d : {Dialect::Abb, Dialect::Fanuc, Dialect::Ur, Dialect::Strict}) {
+      RobotEndpoint ep;
+      ep.name = std::string(dialectName(d));
+      ep.dialect = d;
+      store_->addRobot(ep.name, daemon::RobotPolicy{1, 1500, daemon::PartOrder::BestScore, 0});
+      servers_.push_back(std::make_unique<RobotServer>(io_, ep, [this](const std::string& robot, const RobotRequest& req, ReplyFn reply) {
+        store_->handle(robot, req, std::move(reply));
+      }));
+      ASSERT_TRUE(servers_.back()->start());
+    }
+    thread_ = std::thread([this] { io_.run(); });
+  }
+  void TearDown() override {
+    onIo([this] {
+      for (auto& s : servers_) s->stop();
+    });
+    work_.reset();
+    io_.stop();
+    thread_.join();
+  }
+  void onIo(const std::function<void()>& f) {
+    std::promise<void> done;
+    asio::post(io_, [&] {
+      f();
+      done.set_value();
+    });
+    done.get_future().wait();
+  }
+  std::uint16_t port(Dialect d) { return servers_[static_cast<std::size_t>(d == Dialect::Abb ? 0 : d == Dialect::Fanuc ? 1 : d == Dialect::Ur ? 2 : 3)]->port(); }
+
+  // A pose at the edge of what the wire carries, with a tilt, and a large cycle id.
+  void publish(std::uint32_t cycle, const Pose& p) {
+    CycleResult r;
+    r.cycleId = cycle;
+    r.jobId = 1;
+    r.status = Status::Ok;
+    PartResult part;
+    part.pose = p;
+    r.parts.push_back(part);
+    onIo([&] { store_->onResult(r); });
+  }
+
+  asio::io_context io_;
+  asio::executor_work_guard<asio::io_context::executor_type> work_ = asio::make_work_guard(io_);
+  std::unique_ptr<daemon::ResultStore> store_;
+  std::vector<std::unique_ptr<RobotServer>> servers_;
+  std::thread thread_;
+};
+
+// R = Rz(rz) Ry(ry) Rx(rx) as a unit quaternion (w, x, y, z), written out.
+Pose poseZyxDeg(double x, double y, double z, double rz, double ry, double rx) {
+  const double cz = std::cos(rz * kPi / 360), sz = std::sin(rz * kPi / 360);
+  const double cy = std::cos(ry * kPi / 360), sy = std::sin(ry * kPi / 360);
+  const double cx = std::cos(rx * kPi / 360), sx = std::sin(rx * kPi / 360);
+  return Pose{x, y, z, cz * cy * cx + sz * sy * sx, cz * cy * sx - sz * sy * cx, cz * sy * cx + sz * cy * sx,
+              sz * cy * cx - cz * sy * sx};
+}
+
+struct Case {
+  std::uint32_t cycle;
+  double x, y, z, rz, ry, rx;
+};
+const std::vector<Case> kCases = {
+    {4711, 512.3, -120.05, 35.0, -12.5, 0.0, 0.0},
+    {8388607, -99999.999, 99999.999, -99999.999, -179.999, -45.5, 179.999},
+    {1, -0.001, 0.0, 1234.5, 90.0, 30.0, -60.0},
+};
+
+TEST_F(robot_languages, RapidModuleParsesEveryReply) {
+  const std::string mod = example("VgrPick.mod");
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(mod, m, std::regex(R"re(SocketSend sock \\Str:="([^"]*)")re"))) << "request not found";
+  const std::string request = m[1].str();
+  EXPECT_EQ(request, "GET,1#");
+  ASSERT_NE(mod.find("FOR i FROM 1 TO 8"), std::string::npos);
+  ASSERT_NE(mod.find("OrientZYX(vals{6}, vals{7}, vals{8})"), std::string::npos);
+
+  Socket s(port(Dialect::Abb));
+  for (const Case& c : kCases) {
+    publish(c.cycle, poseZyxDeg(c.x, c.y, c.z, c.rz, c.ry, c.rx));
+    s.send(request);
+    const std::string reply = s.recvOnce(80);  // SocketReceive \Str: one receive, <= 80 chars
+    ASSERT_LE(reply.size(), 80u);
+    const auto vals = rapidParseReply(reply);
+    ASSERT_TRUE(vals) << reply;
+    EXPECT_EQ((*vals)[0], 0.0f);
+    EXPECT_EQ((*vals)[1], static_cast<float>(c.cycle));  // exact: below 2^23
+    EXPECT_EQ((*vals)[2], static_cast<float>(c.x)) << reply;
+    EXPECT_EQ((*vals)[3], static_cast<float>(c.y)) << reply;
+    EXPECT_EQ((*vals)[4], static_cast<float>(c.z)) << reply;
+    EXPECT_NEAR((*vals)[5], c.rz, 1e-3);  // OrientZYX(rz, ry, rx)
+    EXPECT_NEAR((*vals)[6], c.ry, 1e-3);
+    EXPECT_NEAR((*vals)[7], c.rx, 1e-3);
+  }
+}
+
+TEST_F(robot_languages, KarelTaskParsesFixedColumns) {
+  const std::string kl = example("vgr_bg.kl");
+  // The columns the KAREL program reads, in its order: status, cycle, x, y, z, w, p, r.
+  std::vector<std::pair<int, int>> cols;
+  const std::regex kSub(R"(SUB_STR\(reply, (\d+), (\d+)\))");
+  for (auto it = std::sregex_iterator(kl.begin(), kl.end(), kSub); it != std::sregex_iterator(); ++it)
+    cols.emplace_back(std::stoi((*it)[1].str()), std::stoi((*it)[2].str()));
+  ASSERT_EQ(cols.size(), 8u);
+  ASSERT_NE(kl.find("WRITE sock('GET,', JOB_NO::1, CR)"), std::string::npos);
+
+  Socket s(port(Dialect::Fanuc));
+  for (const Case& c : kCases) {
+    publish(c.cycle, poseZyxDeg(c.x, c.y, c.z, c.rz, c.ry, c.rx));
+    s.send("GET,1\r");  // WRITE sock('GET,', 1, CR)
+    const auto line = karelReadLine(s);
+    ASSERT_TRUE(line);
+    ASSERT_LT(line->size(), 254u);
+    const auto status = karelCnvStrInt(karelSubStr(*line, cols[0].first, cols[0].second));
+    const auto cycle = karelCnvStrInt(karelSubStr(*line, cols[1].first, cols[1].second));
+    ASSERT_TRUE(status && cycle) << *line;
+    EXPECT_EQ(*status, 0);
+    EXPECT_EQ(*cycle, static_cast<long>(c.cycle));
+    std::vector<float> v;
+    for (std::size_t i = 2; i < 8; ++i) {
+      const auto f = karelCnvStrReal(karelSubStr(*line, cols[i].first, cols[i].second));
+      ASSERT_TRUE(f) << *line << " field " << i;
+      v.push_back(*f);
+    }
+    EXPECT_EQ(v[0], static_cast<float>(c.x)) << *line;
+    EXPECT_EQ(v[1], static_cast<float>(c.y)) << *line;
+    EXPECT_EQ(v[2], static_cast<float>(c.z)) << *line;
+    EXPECT_NEAR(v[3], c.rx, 1e-3);  // W
+    EXPECT_NEAR(v[4], c.ry, 1e-3);  // P
+    EXPECT_NEAR(v[5], c.rz, 1e-3);  // R
+  }
+}
+
+TEST_F(robot_languages, UrScriptReadsEightFloats) {
+  const std::string script = example("vgr_pick.script");
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(script, m, std::regex(R"re(socket_send_line\("([^"]*)")re")));
+  ASSERT_NE(script.find("socket_read_ascii_float(8"), std::string::npos);
+  const std::string request = m[1].str() + "\n";  // socket_send_line adds the newline
+
+  Socket s(port(Dialect::Ur));
+  for (const Case& c : kCases) {
+    const Pose p = poseZyxDeg(c.x, c.y, c.z, c.rz, c.ry, c.rx);
+    publish(c.cycle, p);
+    s.send(request);
+    const std::vector<double> r = urReadAsciiFloat(s, 8);
+    ASSERT_EQ(r[0], 8);
+    EXPECT_EQ(r[1], 0);
+    EXPECT_EQ(r[2], c.cycle);
+    EXPECT_NEAR(r[3] * 1000, c.x, 1e-3);
+    EXPECT_NEAR(r[4] * 1000, c.y, 1e-3);
+    EXPECT_NEAR(r[5] * 1000, c.z, 1e-3);
+    // Rotation vector: |v| = angle, v / |v| = axis, against the quaternion.
+    const double angle = std::sqrt(r[6] * r[6] + r[7] * r[7] + r[8] * r[8]);
+    const double w = std::cos(angle / 2), k = angle > 1e-12 ? std::sin(angle / 2) / angle : 0.5;
+    const double dot = std::abs(w * p.qw + k * (r[6] * p.qx + r[7] * p.qy + r[8] * p.qz));
+    EXPECT_NEAR(dot, 1.0, 1e-9);
+  }
+}
+
+TEST_F(robot_languages, UrStrictScriptHandshake) {
+  const std::string script = example("vgr_strict.script");
+  for (const char* needle : {"cmd == \"MoveJ_pose\"", "socket_send_string(\"MoveJ_pose_wait_pos\"",
+                             "socket_read_ascii_float(6", "socket_send_string(\"MoveJ_pose_done\""})
+    ASSERT_NE(script.find(needle), std::string::npos) << needle;
+
+  Socket s(port(Dialect::Strict));
+  const Case& c = kCases[1];
+  publish(c.cycle, poseZyxDeg(c.x, c.y, c.z, c.rz, c.ry, c.rx));
+  EXPECT_EQ(s.recvOnce(64), "MoveJ_pose");  // socket_read_string: what is there
+  s.send("MoveJ_pose_wait_pos");
+  const std::vector<double> v = urReadAsciiFloat(s, 6);
+  ASSERT_EQ(v[0], 6);
+  EXPECT_NEAR(v[1] * 1000, c.x, 1e-3);
+  EXPECT_NEAR(v[2] * 1000, c.y, 1e-3);
+  EXPECT_NEAR(v[3] * 1000, c.z, 1e-3);
+  s.send("MoveJ_pose_done");
+}
+
+}  // namespace
+}  // namespace vgr::protocol
