@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/result.hpp"
+#include "vision/locate/locator.hpp"
 
 namespace cv {
 class Mat;
@@ -20,16 +21,11 @@ struct MomentsParams {
   double maxAreaPx = 1e7;   // px²: larger blobs are ignored (glare, a belt seam)
 };
 
-struct Detection {
-  double u = 0, v = 0;     // centroid, px (x right, y down, pixel centres at integers)
-  double angleDeg = 0;     // direction of the part's +x axis, counter-clockwise as displayed, (-180, 180]
-  double areaPx = 0;       // px²
-  double score = 0;        // 0..1: confidence that the orientation is well defined
-};
-
 // gray: 8-bit single channel, parts bright on a dark background. Parts touching the image
 // border are skipped (their moments would be wrong). Returns detections best score first;
-// an empty list means no part (not an error). Errors: Status::BadArgument for a wrong image type.
+// an empty list means no part (not an error). Here (u, v) is the blob's centroid and angleDeg
+// the direction of its major axis in the image (not yet relative to a template: MomentsLocator
+// in locator.cpp does that). Errors: Status::BadArgument for a wrong image type.
 Result<std::vector<Detection>> locateByMoments(const cv::Mat& gray, const MomentsParams& params);
 
 }  // namespace vgr::vision
