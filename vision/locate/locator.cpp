@@ -3,10 +3,12 @@
 #include <charconv>
 #include <cmath>
 #include <fmt/core.h>
+#include <fmt/ranges.h>
 #include <numbers>
 
 #include <opencv2/core.hpp>
 
+#include "vision/locate/hu_sift_locators.hpp"
 #include "vision/locate/moments_locator.hpp"
 #include "vision/locate/params.hpp"
 
@@ -137,11 +139,13 @@ Result<std::unique_ptr<Locator>> makeLocator(std::string_view method, const cv::
     return fail(Status::BadArgument, fmt::format("{}: max_parts must be in [1, 64], got {}", method, taught.maxParts));
   // One line per method; keep the order of locatorMethods().
   if (method == "moments") return makeMoments(templateGray, taught);
-  return fail(Status::BadArgument, fmt::format("unknown locate method '{}' (known: moments)", method));
+  if (method == "hu") return makeHuLocator(templateGray, taught);
+  if (method == "sift") return makeSiftLocator(templateGray, taught);
+  return fail(Status::BadArgument, fmt::format("unknown locate method '{}' (known: {})", method, fmt::join(locatorMethods(), ", ")));
 }
 
 const std::vector<std::string>& locatorMethods() {
-  static const std::vector<std::string> kMethods{"moments"};
+  static const std::vector<std::string> kMethods{"moments", "hu", "sift"};
   return kMethods;
 }
 
