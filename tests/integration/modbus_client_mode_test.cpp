@@ -12,13 +12,29 @@ namespace {
 using namespace std::chrono_literals;
 using vgr::test::ModbusCell;
 
-constexpr int kPlcPort = 1503;  // modbus.client.port of the sim cell
+// A loopback port nobody listens on now (the kernel's pick), for the PLC's server, so this
+// test does not depend on the sim cell's 1503 being free on a shared machine.
+int freePort() {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  socklen_t len = sizeof a;
+  const bool ok = ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0 &&
+                  ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len) == 0;
+  ::close(fd);
+  return ok ? ntohs(a.sin_port) : 0;
+}
 
+const int kPlcPort = freePort();
+
+// The sim cell's modbus.client section, enabled and pointed at kPlcPort.
 std::string enableClient(std::string yaml) {
-  const std::string from = "  client:\n    enabled: false";
+  const std::string from = "  client:\n    enabled: false\n    host: 127.0.0.1\n    port: 1503";
   const auto at = yaml.find(from);
-  EXPECT_NE(at, std::string::npos) << "sim-cell.yaml has no disabled modbus.client section";
-  if (at != std::string::npos) yaml.replace(at, from.size(), "  client:\n    enabled: true");
+  EXPECT_NE(at, std::string::npos) << "sim-cell.yaml has no disabled modbus.client section on 1503";
+  if (at != std::string::npos)
+    yaml.replace(at, from.size(), "  client:\n    enabled: true\n    host: 127.0.0.1\n    port: " + std::to_string(kPlcPort));
   return yaml;
 }
 
@@ -57,7 +73,7 @@ class modbus_client_mode : public ModbusCell {
 };
 
 TEST_F(modbus_client_mode, SimPlcServerPulsesTheSensorAndReceivesEveryResult) {
-  ASSERT_TRUE(portFree(kPlcPort));
+  ASSERT_NE(kPlcPort, 0);
   ASSERT_NO_FATAL_FAILURE(startCell(enableClient));
   auto plc = vgr::daemon::ChildProcess::spawn({bin("vgr-sim-plc"), "--serve", "--port", std::to_string(kPlcPort),
                                                 "--cycles", "6", "--interval-ms", "50", "--json"},
@@ -75,7 +91,7 @@ TEST_F(modbus_client_mode, SimPlcServerPulsesTheSensorAndReceivesEveryResult) {
 }
 
 TEST_F(modbus_client_mode, AGlitchShorterThanTheDebounceTriggersNothing) {
-  ASSERT_TRUE(portFree(kPlcPort));
+  ASSERT_NE(kPlcPort, 0);
   ASSERT_NO_FATAL_FAILURE(startCell(enableClient));  // debounce_ms: 20
   auto plc = vgr::daemon::ChildProcess::spawn({bin("vgr-sim-plc"), "--serve", "--port", std::to_string(kPlcPort),
                                                 "--cycles", "1", "--pulse-ms", "4", "--timeout-ms", "1500", "--json"},
@@ -93,13 +109,14 @@ TEST_F(modbus_client_mode, AGlitchShorterThanTheDebounceTriggersNothing) {
 // pymodbus as the PLC: its own server, the sensor on discrete input 0, the block read from
 // its datastore. Three pulses, each answered by a new result.
 TEST_F(modbus_client_mode, PymodbusServerAsThePlc) {
-  ASSERT_TRUE(portFree(kPlcPort));
+  ASSERT_NE(kPlcPort, 0);
   // dir_ exists only once the cell starts, and the PLC must be up first.
   const auto tmp = std::filesystem::temp_directory_path();
   const auto script = tmp / ("vgr-plc-server-" + std::to_string(::getpid()) + ".py");
   const auto plcLog = tmp / ("vgr-plc-server-" + std::to_string(::getpid()) + ".log");
   std::ofstream(script) << R"PY(
 import asyncio, json, struct, sys, time
+PORT = int(sys.argv[1])
 from pymodbus.server import StartAsyncTcpServer
 from pymodbus.datastore import ModbusSequentialDataBlock, ModbusSlaveContext, ModbusServerContext
 
@@ -124,7 +141,7 @@ async def until(pred, timeout=10.0):
     return False
 
 async def plc():
-    print(json.dumps({"listening": 1503}), flush=True)
+    print(json.dumps({"listening": PORT}), flush=True)
     if not await until(lambda b: b[0] & 1 and not b[0] & 4, 20.0):
         print(json.dumps({"error": "never READY"}), flush=True); return
     last = block()[3]
@@ -142,12 +159,12 @@ async def plc():
         await asyncio.sleep(0.05)
 
 async def main():
-    asyncio.create_task(StartAsyncTcpServer(context=ctx, address=("127.0.0.1", 1503)))
+    asyncio.create_task(StartAsyncTcpServer(context=ctx, address=("127.0.0.1", PORT)))
     await plc()
 
 asyncio.run(main())
 )PY";
-  auto plc = vgr::daemon::ChildProcess::spawn({"/usr/bin/python3", script.string()}, plcLog.string());
+  auto plc = vgr::daemon::ChildProcess::spawn({"/usr/bin/python3", script.string(), std::to_string(kPlcPort)}, plcLog.string());
   ASSERT_TRUE(plc.has_value());
   ASSERT_TRUE(plc->waitForLine("listening", 10s));
   ASSERT_NO_FATAL_FAILURE(startCell(enableClient));
