@@ -8,7 +8,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <numbers>
 #include <random>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -53,6 +55,11 @@ int main(int argc, char** argv) {
   app.add_option("--focal", focal, "focal length, px (part length ~ 100 * focal / height px)");
   app.add_option("--camera-height", camHeight, "mm above the plane");
   app.add_option("--seed", seed);
+  bool verbose = false, drawnTruth = false;
+  app.add_flag("--drawn-truth", drawnTruth,
+               "positions against the centroid the renderer actually drew (template grasp point too), "
+               "not SceneTruth's (see drawnCentroid)");
+  app.add_flag("--verbose", verbose, "print every image's signed error in the part frame");
   app.add_option("--template-angle", templateAngle, "deg, the part in the template image (CCW as displayed)");
   app.add_option("--methods", methods, "methods to run (default: all of locatorMethods())");
   app.add_option("--param", params, "method parameter NAME=VALUE (every method gets it)");
@@ -62,7 +69,7 @@ int main(int argc, char** argv) {
   const auto renderer = vgr::bench::makeRenderer(width, height, focal, camHeight, sigma, seed);
   const auto tp = vgr::bench::makeTemplate(renderer, templateAngle, 20, seed * 7919 + 3);
   vgr::vision::TaughtTemplate taught;
-  taught.grasp = tp.grasp;
+  taught.grasp = drawnTruth ? tp.graspDrawn : tp.grasp;
   taught.angleMinDeg = -range;
   taught.angleMaxDeg = range;
   for (const auto& kv : params) {
@@ -83,6 +90,10 @@ int main(int argc, char** argv) {
     const double angle = range >= 180 ? da(rng) : da(rng);
     truths.push_back(vgr::bench::truthAt(renderer, du(rng), dv(rng), tp.truth.angleImgDeg + angle));
     renderer.renderTruth(truths.back(), seed * 7777 + static_cast<std::uint64_t>(i), imgs[i]);
+    if (drawnTruth) {
+      const auto c = vgr::bench::drawnCentroid(renderer, truths.back());
+      truths.back().uPx = c.u, truths.back().vPx = c.v;
+    }
   }
 
   std::vector<Row> rows;
@@ -106,6 +117,12 @@ int main(int argc, char** argv) {
       const auto& t = truths[i];
       const double pos = std::hypot(d.u - t.uPx, d.v - t.vPx);
       const double ang = std::abs(vgr::bench::normaliseDeg(d.angleDeg - (t.angleImgDeg - tp.truth.angleImgDeg)));
+      if (verbose) {
+        // Signed error in the part's frame (x along the part's axis as displayed).
+        const double a = t.angleImgDeg * std::numbers::pi / 180, ex = d.u - t.uPx, ey = d.v - t.vPx;
+        std::printf("%s %d err_part %+.4f %+.4f ang %+.4f\n", method.c_str(), i, ex * std::cos(a) - ey * std::sin(a),
+                    ex * std::sin(a) + ey * std::cos(a), d.angleDeg - (t.angleImgDeg - tp.truth.angleImgDeg));
+      }
       if (pos > 2 || ang > 1) continue;
       ++row.ok;
       row.sumPos += pos, row.maxPos = std::max(row.maxPos, pos);
@@ -114,8 +131,8 @@ int main(int argc, char** argv) {
     rows.push_back(row);
   }
 
-  std::printf("%dx%d, %d images, sigma %.1f, rotation +-%.0f deg, part ~%.0f px long\n", width, height, images, sigma,
-              range, 100 * focal / camHeight);
+  std::printf("%dx%d, %d images, sigma %.1f, rotation +-%.0f deg, part ~%.0f px long, truth: %s\n", width, height, images,
+              sigma, range, 100 * focal / camHeight, drawnTruth ? "drawn centroid" : "SceneTruth");
   std::printf("| method | median ms | success | mean px | max px | mean deg | max deg |\n");
   std::printf("|---|---:|---:|---:|---:|---:|---:|\n");
   for (const Row& r : rows) {

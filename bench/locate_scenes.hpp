@@ -62,10 +62,35 @@ inline sim::SceneTruth truthAt(const sim::SceneRenderer& r, double u, double v, 
   return t;
 }
 
+// The centroid of what the renderer actually drew for `t`: the coverage-weighted centroid of a
+// noise-free rendering (coverage from the conveyor's known shading and the part's gray level).
+// SceneRenderer's anti-aliasing (8x supersampled fillPoly) places the drawn part up to ~0.06 px
+// away from SceneTruth::uPx/vPx (measured, docs/performance.md), the same order as the shape
+// matcher's error: the benchmark reports errors against both.
+inline vision::PixelPoint drawnCentroid(const sim::SceneRenderer& r, const sim::SceneTruth& t) {
+  sim::SceneOptions o = r.options();
+  o.noiseSigma = 0;
+  const sim::SceneRenderer clean(r.model(), o);
+  cv::Mat img;
+  clean.renderTruth(t, 0, img);
+  double m = 0, mx = 0, my = 0;
+  for (int y = 0; y < img.rows; ++y) {
+    const auto* row = img.ptr<std::uint8_t>(y);
+    for (int x = 0; x < img.cols; ++x) {
+      const double bg = o.background + (8 * x) / img.cols;  // SceneRenderer's belt shading
+      const double c = (row[x] - bg) / (o.foreground - bg);
+      if (c <= 0) continue;
+      m += c, mx += c * x, my += c * y;
+    }
+  }
+  return {mx / m, my / m};
+}
+
 struct Template {
   cv::Mat image;                  // CV_8UC1 crop
   sim::SceneTruth truth;          // of the full rendering it was cut from
   vision::PixelPoint grasp;       // the part's centroid, template px
+  vision::PixelPoint graspDrawn;  // the drawn part's centroid (drawnCentroid), template px
 };
 
 // The part at the image centre at angleImgDeg, cut out with `marginPx` around its outline.
@@ -88,6 +113,8 @@ inline Template makeTemplate(const sim::SceneRenderer& r, double angleImgDeg, in
                        cv::Rect(0, 0, full.cols, full.rows);
   tp.image = full(box).clone();
   tp.grasp = {tp.truth.uPx - box.x, tp.truth.vPx - box.y};
+  const auto drawn = drawnCentroid(r, tp.truth);
+  tp.graspDrawn = {drawn.u - box.x, drawn.v - box.y};
   return tp;
 }
 
