@@ -9,6 +9,7 @@
 
 #include "vision/locate/moments_locator.hpp"
 #include "vision/locate/params.hpp"
+#include "vision/locate/shape_matcher.hpp"
 
 namespace vgr::vision {
 
@@ -137,11 +138,12 @@ Result<std::unique_ptr<Locator>> makeLocator(std::string_view method, const cv::
     return fail(Status::BadArgument, fmt::format("{}: max_parts must be in [1, 64], got {}", method, taught.maxParts));
   // One line per method; keep the order of locatorMethods().
   if (method == "moments") return makeMoments(templateGray, taught);
-  return fail(Status::BadArgument, fmt::format("unknown locate method '{}' (known: moments)", method));
+  if (method == "shape") return makeShapeLocator(templateGray, taught);
+  return fail(Status::BadArgument, fmt::format("unknown locate method '{}' (known: moments, shape)", method));
 }
 
 const std::vector<std::string>& locatorMethods() {
-  static const std::vector<std::string> kMethods{"moments"};
+  static const std::vector<std::string> kMethods{"moments", "shape"};
   return kMethods;
 }
 
