@@ -11,6 +11,7 @@
 #include "vision/locate/hu_sift_locators.hpp"
 #include "vision/locate/moments_locator.hpp"
 #include "vision/locate/params.hpp"
+#include "vision/locate/shape_matcher.hpp"
 
 namespace vgr::vision {
 
@@ -141,11 +142,12 @@ Result<std::unique_ptr<Locator>> makeLocator(std::string_view method, const cv::
   if (method == "moments") return makeMoments(templateGray, taught);
   if (method == "hu") return makeHuLocator(templateGray, taught);
   if (method == "sift") return makeSiftLocator(templateGray, taught);
+  if (method == "shape") return makeShapeLocator(templateGray, taught);
   return fail(Status::BadArgument, fmt::format("unknown locate method '{}' (known: {})", method, fmt::join(locatorMethods(), ", ")));
 }
 
 const std::vector<std::string>& locatorMethods() {
-  static const std::vector<std::string> kMethods{"moments", "hu", "sift"};
+  static const std::vector<std::string> kMethods{"moments", "hu", "sift", "shape"};
   return kMethods;
 }
 
