@@ -213,3 +213,30 @@ inline double matchTruePositiveRate(const std::vector<vision::MatchPair>& matche
 }
 
 }  // namespace vgr::test
+
+namespace vgr::test {
+
+// A scene without the part: belt, noise and a textured distractor (a different pattern).
+inline cv::Mat renderDistractorScene(cv::Size size, double noiseSigma, std::uint64_t seed) {
+  cv::Mat img(size, CV_8U, cv::Scalar(kBackground));
+  std::mt19937 rng(static_cast<unsigned>(seed) + 77);
+  std::uniform_int_distribution<int> gray(70, 235), x(400, 800), y(300, 700), r(3, 12);
+  cv::rectangle(img, cv::Rect(380, 280, 440, 440), cv::Scalar(120), cv::FILLED);
+  for (int k = 0; k < 120; ++k) cv::circle(img, {x(rng), y(rng)}, r(rng), cv::Scalar(gray(rng)), cv::FILLED, cv::LINE_AA);
+  cv::Mat noise(size, CV_32F), f;
+  cv::RNG(seed).fill(noise, cv::RNG::NORMAL, 0.0, noiseSigma);
+  img.convertTo(f, CV_32F);
+  f += noise;
+  f.convertTo(img, CV_8U);
+  return img;
+}
+
+// Index of the truth pose nearest to (u, v).
+inline size_t nearestPose(const std::vector<PartPose>& poses, double u, double v) {
+  size_t best = 0;
+  for (size_t k = 1; k < poses.size(); ++k)
+    if (std::hypot(poses[k].u - u, poses[k].v - v) < std::hypot(poses[best].u - u, poses[best].v - v)) best = k;
+  return best;
+}
+
+}  // namespace vgr::test

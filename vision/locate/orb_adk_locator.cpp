@@ -23,7 +23,7 @@ struct AdkParams {
   double prosacThresholdPx = 3.0;  // [0.5, 20] PROSAC inlier distance (the pre-filter)
   double distanceBoundPx = 5.0;    // [0.5, 50] class bound on the distance difference (paper: 5 px)
   double angleBoundDeg = 3.0;      // [0.1, 30] class bound on the angle difference (paper: 3 degrees)
-  int references = 3;              // [1, 20] most credible matches tried as the reference point
+  int references = 10;             // [1, 50] most credible matches tried as the reference point
 };
 
 constexpr double kRadToDeg = 180.0 / std::numbers::pi;
@@ -217,7 +217,7 @@ Result<std::unique_ptr<Locator>> makeOrbAdkLocator(const cv::Mat& templateGray, 
   p.prosacThresholdPx = r.number("prosac_threshold_px", p.prosacThresholdPx, 0.5, 20);
   p.distanceBoundPx = r.number("distance_bound_px", p.distanceBoundPx, 0.5, 50);
   p.angleBoundDeg = r.number("angle_bound_deg", p.angleBoundDeg, 0.1, 30);
-  p.references = r.integer("references", p.references, 1, 20);
+  p.references = r.integer("references", p.references, 1, 50);
   if (auto ok = r.finish(); !ok) return std::unexpected(ok.error());
 
   const int minInliers = search.minInliers;
