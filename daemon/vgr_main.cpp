@@ -3,6 +3,7 @@
 //   vgr check --config FILE   validate a cell config
 //   vgr cameras [--json]      list the GigE Vision cameras on the network (docs/cameras.md)
 //   vgr grab --camera ID ...  trigger N frames, report errors and latency (docs/cameras.md)
+//   vgr sim render | teach | locate | eval   localization datasets, jobs, runs (docs/localization.md)
 #include <cstdio>
 #include <string>
 
@@ -11,6 +12,7 @@
 #include "config/cell_config.hpp"
 #include "daemon/demo.hpp"
 #include "daemon/grab.hpp"
+#include "daemon/locate_cli.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"vgr: vision-guided robotics tool"};
@@ -48,7 +50,9 @@ int main(int argc, char** argv) {
   grabCmd->add_option("--interval-ms", grab.intervalMs, "pause between triggers")->check(CLI::Range(0, 60000));
   grabCmd->add_flag("--json", grab.json, "JSON output; the last line is {\"frames\",\"ok\",\"errors\",\"p50_ms\",\"p99_ms\"}");
 
+  vgr::daemon::LocateCommands locateCmds(app);  // sim render, teach, locate, eval
   CLI11_PARSE(app, argc, argv);
+  if (const int rc = locateCmds.run(); rc >= 0) return rc;
 
   if (*camerasCmd) return vgr::daemon::runCameras(camerasJson);
   if (*grabCmd) return vgr::daemon::runGrab(grab);
