@@ -3,13 +3,15 @@
 #include <charconv>
 #include <cmath>
 #include <fmt/core.h>
-#include <fmt/ranges.h>
 #include <numbers>
 
 #include <opencv2/core.hpp>
 
+#include "vision/locate/contour_weighted_locator.hpp"
 #include "vision/locate/hu_sift_locators.hpp"
 #include "vision/locate/moments_locator.hpp"
+#include "vision/locate/orb_adk_locator.hpp"
+#include "vision/locate/orb_homography_locator.hpp"
 #include "vision/locate/params.hpp"
 #include "vision/locate/shape_matcher.hpp"
 
@@ -142,12 +144,18 @@ Result<std::unique_ptr<Locator>> makeLocator(std::string_view method, const cv::
   if (method == "moments") return makeMoments(templateGray, taught);
   if (method == "hu") return makeHuLocator(templateGray, taught);
   if (method == "sift") return makeSiftLocator(templateGray, taught);
+  if (method == "orb-ransac") return makeOrbRansacLocator(templateGray, taught);
+  if (method == "orb-prosac") return makeOrbProsacLocator(templateGray, taught);
+  if (method == "orb-adk") return makeOrbAdkLocator(templateGray, taught);
+  if (method == "contour-weighted") return makeContourWeightedLocator(templateGray, taught);
   if (method == "shape") return makeShapeLocator(templateGray, taught);
-  return fail(Status::BadArgument, fmt::format("unknown locate method '{}' (known: {})", method, fmt::join(locatorMethods(), ", ")));
+  std::string known;
+  for (const auto& m : locatorMethods()) known += (known.empty() ? "" : ", ") + m;
+  return fail(Status::BadArgument, fmt::format("unknown locate method '{}' (known: {})", method, known));
 }
 
 const std::vector<std::string>& locatorMethods() {
-  static const std::vector<std::string> kMethods{"moments", "hu", "sift", "shape"};
+  static const std::vector<std::string> kMethods{"moments", "hu", "sift", "orb-ransac", "orb-prosac", "orb-adk", "contour-weighted", "shape"};
   return kMethods;
 }
 
