@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "config/cell_config.hpp"
 #include "config/job.hpp"
 #include "daemon/locate_eval.hpp"
 #include "sim/dataset.hpp"
@@ -167,6 +168,46 @@ TEST(locate_job, EvalScoresAMethodAgainstTheDatasetTruth) {
   o.plotPath = (dir / "errors.png").string();
   ASSERT_TRUE(vgr::daemon::plotErrors(*rep, o, o.plotPath).has_value());
   EXPECT_FALSE(cv::imread(o.plotPath).empty());
+  fs::remove_all(dir);
+}
+
+// A cell config job naming a folder: resolved against the config file's folder; its method,
+// grasp height and reference come from job.yaml; keys that job.yaml owns are refused.
+TEST(locate_job, CellConfigJobsNameAFolder) {
+  const fs::path dir = tempDir("cellfolder");
+  fs::create_directories(dir / "jobs" / "bracket");
+  auto j = sampleJob(dir / "jobs" / "bracket");
+  ASSERT_TRUE(vgr::config::writeJob(j).has_value());
+  std::ofstream(dir / "jobs" / "bracket" / "template.png") << "x";  // only its existence is checked here
+  std::string yaml = vgr::config::embeddedSimCellYaml();
+  const auto a = yaml.find("jobs:\n"), b = yaml.find("\n# Used by the simulators");
+  ASSERT_NE(a, std::string::npos);
+  ASSERT_NE(b, std::string::npos);
+  auto withJob = [&](const std::string& entry) {
+    std::string y = yaml;
+    y.replace(a, b - a, "jobs:\n  - id: 3\n" + entry);
+    return vgr::config::parseCellConfig(y, (dir / "cell.yaml").string());
+  };
+  auto cfg = withJob("    folder: jobs/bracket\n");
+  ASSERT_TRUE(cfg.has_value()) << cfg.error().message;
+  EXPECT_EQ(cfg->jobs[0].folder, (dir / "jobs" / "bracket").string());
+  EXPECT_EQ(cfg->jobs[0].method, "hu");
+  EXPECT_DOUBLE_EQ(cfg->jobs[0].partHeightMm, 35);
+  EXPECT_DOUBLE_EQ(cfg->jobs[0].reference.x, 400);
+  cfg = withJob("    folder: jobs/bracket\n    method: sift\n");
+  ASSERT_TRUE(cfg.has_value()) << cfg.error().message;
+  EXPECT_EQ(cfg->jobs[0].method, "sift");
+  cfg = withJob("    folder: jobs/bracket\n    threshold: 80\n");
+  ASSERT_FALSE(cfg.has_value());
+  EXPECT_NE(cfg.error().message.find("key 'jobs[0].threshold': set in the job folder's job.yaml"), std::string::npos)
+      << cfg.error().message;
+  cfg = withJob("    folder: jobs/nothing\n");
+  ASSERT_FALSE(cfg.has_value());
+  EXPECT_NE(cfg.error().message.find("key 'jobs[0].folder': " + (dir / "jobs" / "nothing").string() + "/job.yaml: cannot open"),
+            std::string::npos) << cfg.error().message;
+  cfg = withJob("    method: sift\n");
+  ASSERT_FALSE(cfg.has_value());
+  EXPECT_NE(cfg.error().message.find("other methods need a job folder"), std::string::npos) << cfg.error().message;
   fs::remove_all(dir);
 }
 
