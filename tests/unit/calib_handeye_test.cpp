@@ -51,7 +51,9 @@ void poseError(const Pose& a, const Pose& b, double& mm, double& deg) {
 class calib_handeye_accuracy : public ::testing::TestWithParam<HandEyeConfig> {};
 
 TEST_P(calib_handeye_accuracy, refined_result_within_half_a_millimetre_and_0p05_deg) {
-  const Data d = makeData(GetParam(), 15, 0.2, 0.05, 0.01, 1);
+  for (std::uint64_t seed : {1, 2, 3}) {
+  SCOPED_TRACE(seed);
+  const Data d = makeData(GetParam(), 15, 0.2, 0.05, 0.01, seed);
   ASSERT_EQ(d.views.size(), 15u);
   auto r = vision::calib::calibrateHandEye(d.views, d.cam, kSpec, GetParam());
   ASSERT_TRUE(r) << r.error().message;
@@ -69,6 +71,8 @@ TEST_P(calib_handeye_accuracy, refined_result_within_half_a_millimetre_and_0p05_
   EXPECT_TRUE(r->bestResult().valid);
   EXPECT_FALSE(r->reason.empty());
   EXPECT_LT(r->bestResult().reprojRmsPx, 0.5);
+  EXPECT_EQ(r->bestResult().method, "refined");
+  }
 }
 
 TEST_P(calib_handeye_accuracy, noise_free_data_is_recovered_exactly) {
