@@ -4,6 +4,7 @@
 //   vgr cameras [--json]      list the GigE Vision cameras on the network (docs/cameras.md)
 //   vgr grab --camera ID ...  trigger N frames, report errors and latency (docs/cameras.md)
 //   vgr calibrate intrinsics|handeye|synth ...   calibration (docs/calibration.md)
+//   vgr sim render | teach | locate | eval   localization datasets, jobs, runs (docs/localization.md)
 #include <cstdio>
 #include <string>
 
@@ -13,6 +14,7 @@
 #include "daemon/calibrate.hpp"
 #include "daemon/demo.hpp"
 #include "daemon/grab.hpp"
+#include "daemon/locate_cli.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"vgr: vision-guided robotics tool"};
@@ -88,7 +90,9 @@ int main(int argc, char** argv) {
   calSynCmd->add_option("--max-tilt", calSyn.maxTiltDeg, "largest plate tilt, deg");
   calSynCmd->add_option("--distance", calSyn.distanceMm, "camera-plate distance, mm");
 
+  vgr::daemon::LocateCommands locateCmds(app);  // sim render, teach, locate, eval
   CLI11_PARSE(app, argc, argv);
+  if (const int rc = locateCmds.run(); rc >= 0) return rc;
 
   if (*calIntrCmd) return vgr::daemon::runCalibrateIntrinsics(calIntr);
   if (*calHeCmd) return vgr::daemon::runCalibrateHandEye(calHe);

@@ -84,6 +84,11 @@ struct VgrdApp::Impl {
   void checkReady() {
     if (!notifiedReady && camera->streaming()) {
       notifiedReady = true;
+      // READY goes up with the first frame the camera can give: a PLC that triggers the
+      // moment it sees READY gets a part, not -4. Later camera loss keeps READY (triggers
+      // end in -4 CAMERA_ERROR within the deadline, so the PLC sees the fault).
+      if (modbus) modbus->setReady(true);
+      if (modbusClient) modbusClient->setReady(true);
       sd_notify(0, "READY=1\nSTATUS=camera streaming, servers listening");
       log::info("main", "ready: camera streaming, Modbus on {}:{}, {} robot endpoint(s)", cfg.modbus.bind,
                 modbus ? modbus->port() : 0, robots.size());
@@ -107,8 +112,11 @@ struct VgrdApp::Impl {
   void logStats() {
     // Periodic summary instead of per-frame logging (STYLE.md rule 12).
     const auto c = camera->counters();
-    log::info("main", "camera: {} frames, {} failed ({} timeouts), {} reconnects, {} abandoned; trigger overruns {}",
-              c.completed, c.failed, c.timeouts, c.reconnects, c.abandoned, cycles->overruns());
+    log::info("main",
+              "camera: {} frames, {} failed ({} timeouts, {} incomplete), {} re-triggers ({} recovered), {} reconnects, "
+              "{} abandoned; packets missing {}, resent {}; underruns {}; trigger overruns {}",
+              c.completed, c.failed, c.timeouts, c.incomplete, c.retries, c.recovered, c.reconnects, c.abandoned,
+              c.missingPackets, c.resentPackets, c.underruns, cycles->overruns());
     statsTimer.expires_after(std::chrono::seconds(60));
     statsTimer.async_wait([this](const boost::system::error_code& ec) {
       if (!ec) logStats();
@@ -188,7 +196,6 @@ Result<void> VgrdApp::start() {
     s.modbus = std::make_unique<protocol::ModbusServer>(
         mo, [&s](int jobId) { return s.cycles->submit(jobId, TriggerSource::Modbus); });
     if (auto r = s.modbus->start(); !r) return r;
-    s.modbus->setReady(true);
   }
   if (s.cfg.modbus.client.enabled) {
     const auto& c = s.cfg.modbus.client;
@@ -210,7 +217,6 @@ Result<void> VgrdApp::start() {
     s.modbusClient = std::make_unique<protocol::ModbusClientTrigger>(
         co, [&s](int jobId) { return s.cycles->submit(jobId, TriggerSource::Modbus); });
     if (auto r = s.modbusClient->start(); !r) return r;
-    s.modbusClient->setReady(true);
   }
 
   s.camera->start();

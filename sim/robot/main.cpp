@@ -1,11 +1,16 @@
 // vgr-sim-robot: behaves like an unmodified robot program polling vgrd for part poses, and
-// checks every reply strictly against the dialect (PROTOCOLS.md, `ur` and `abb`).
+// checks every reply strictly against the dialect (docs/protocols.md).
 //
-//   ur : socket_send_line("GET,<job>")  -> "GET,<job>\n"; reads up to ')' as
-//        socket_read_ascii_float does.
-//   abb: SocketSend \Str:="GET,<job>#"; SocketReceive \Str reads whatever is buffered, at
-//        most 80 characters, in ONE call: a reply split over two TCP segments, longer than
-//        80 characters or followed by stray bytes shows up as invalid.
+//   ur    : socket_send_line("GET,<job>")  -> "GET,<job>\n"; reads up to ')' as
+//           socket_read_ascii_float does.
+//   abb   : SocketSend \Str:="GET,<job>#"; SocketReceive \Str reads whatever is buffered, at
+//           most 80 characters, in ONE call: a reply split over two TCP segments, longer than
+//           80 characters or followed by stray bytes shows up as invalid.
+//   fanuc : WRITE "GET,<job>" CR LF; READ a line up to CR LF (KAREL file READ), which must be
+//           the 75-byte fixed-column reply that SUB_STR/CNV_STR_REAL take apart.
+//   binary: the 16-byte VGRQ request; reads exactly 40 bytes (socket_read_binary_integer(10))
+//           and checks magic and length.
+// (`strict` is a push protocol, not a poll: tests/integration/robot_wire_test.cpp plays it.)
 //
 // Output: one line per reply on stdout (JSON with --json); diagnostics on stderr.
 // A reply that does not come within --timeout-ms counts as invalid (the protocol promises a
@@ -55,7 +60,7 @@ using vgr::protocol::Dialect;
 
 constexpr auto kConnectWindow = std::chrono::seconds(10);
 constexpr auto kConnectRetryDelay = std::chrono::milliseconds(200);
-constexpr std::size_t kUrMaxReplyBytes = 1024;  // give up looking for ')' after this
+constexpr std::size_t kMaxReplyBytes = 1024;  // ur/fanuc: give up looking for the end after this
 constexpr double kPi = 3.14159265358979323846;
 
 struct Options {
@@ -84,11 +89,33 @@ double round3(double v) {
   return r == 0.0 ? 0.0 : r;  // no -0 in the output
 }
 
+Parsed parseBinary(const std::string& raw) {
+  namespace bin = vgr::protocol::binary;
+  Parsed p;
+  if (raw.size() != bin::kReplyBytes || static_cast<std::uint32_t>(bin::readInt32(raw, 0)) != bin::kReplyMagic ||
+      bin::readInt32(raw, 4) != static_cast<std::int32_t>(bin::kReplyBytes)) {
+    p.error = "not a 40-byte VGRA frame";
+    return p;
+  }
+  p.status = bin::readInt32(raw, 8);
+  p.cycle = bin::readInt32(raw, 12);
+  p.xMm = round3(bin::readInt32(raw, 16) / 1000.0);  // µm
+  p.yMm = round3(bin::readInt32(raw, 20) / 1000.0);
+  p.zMm = round3(bin::readInt32(raw, 24) / 1000.0);
+  p.rzDeg = round3(bin::readInt32(raw, 36) / 1000.0);  // r, millidegrees
+  p.valid = true;
+  return p;
+}
+
 Parsed parseReply(Dialect dialect, const std::string& raw) {
+  if (dialect == Dialect::Binary) return parseBinary(raw);
   static const std::regex kUr(R"(\(-?\d+,\d+(,-?\d+\.\d{6}){6}\))");
   static const std::regex kAbb(R"(-?\d+,\d+(,-?\d+\.\d{3}){6})");
+  // Fixed columns: status, cycle, X, Y, Z, W, P, R, CR LF (docs/protocols.md, "fanuc").
+  static const std::regex kFanuc(R"([+-]\d{4},\d{7}(,[+-]\d{5}\.\d{3}){3}(,[+-]\d{3}\.\d{3}){3}\r\n)");
+  const std::regex& re = dialect == Dialect::Ur ? kUr : dialect == Dialect::Fanuc ? kFanuc : kAbb;
   Parsed p;
-  if (dialect == Dialect::Ur ? !std::regex_match(raw, kUr) : !std::regex_match(raw, kAbb)) {
+  if (!std::regex_match(raw, re)) {
     p.error = "does not match the dialect";
     return p;
   }
@@ -98,11 +125,13 @@ Parsed parseReply(Dialect dialect, const std::string& raw) {
   }
   std::string_view body(raw);
   if (dialect == Dialect::Ur) body = body.substr(1, body.size() - 2);
+  if (dialect == Dialect::Fanuc) body = body.substr(0, body.size() - 2);
   std::array<double, 6> v{};
   std::size_t field = 0;
   while (field < 8) {
     const std::size_t comma = body.find(',');
-    const std::string_view text = body.substr(0, comma);
+    std::string_view text = body.substr(0, comma);
+    if (!text.empty() && text.front() == '+') text.remove_prefix(1);  // from_chars takes no '+'
     std::from_chars_result res{};
     if (field == 0) {
       res = std::from_chars(text.data(), text.data() + text.size(), p.status);
@@ -124,6 +153,11 @@ Parsed parseReply(Dialect dialect, const std::string& raw) {
     p.yMm = round3(v[1] * 1000.0);
     p.zMm = round3(v[2] * 1000.0);
     p.rzDeg = round3(v[5] * 180.0 / kPi);
+  } else if (dialect == Dialect::Fanuc) {  // mm + W, P, R degrees: rz is R, the last
+    p.xMm = round3(v[0]);
+    p.yMm = round3(v[1]);
+    p.zMm = round3(v[2]);
+    p.rzDeg = round3(v[5]);
   } else {  // mm + Z-Y-X degrees: rz is the first angle
     p.xMm = round3(v[0]);
     p.yMm = round3(v[1]);
@@ -138,7 +172,12 @@ class SimRobot {
  public:
   SimRobot(asio::io_context& io, Options opt, Dialect dialect)
       : io_(io), opt_(std::move(opt)), dialect_(dialect), socket_(io), timer_(io), signals_(io, SIGINT, SIGTERM) {
-    request_ = "GET," + std::to_string(opt_.job) + (dialect_ == Dialect::Ur ? "\n" : "#");
+    switch (dialect_) {
+      case Dialect::Ur: request_ = "GET," + std::to_string(opt_.job) + "\n"; break;
+      case Dialect::Fanuc: request_ = "GET," + std::to_string(opt_.job) + "\r\n"; break;
+      case Dialect::Binary: request_ = vgr::protocol::binary::encodeRequest(vgr::protocol::binary::kCmdGet, opt_.job); break;
+      default: request_ = "GET," + std::to_string(opt_.job) + "#"; break;
+    }
   }
 
   void start() {
@@ -210,8 +249,8 @@ class SimRobot {
   }
 
   void readReply(std::uint64_t id) {
-    if (dialect_ == Dialect::Ur) {
-      readUr(id);
+    if (dialect_ != Dialect::Abb) {
+      readFramed(id);
       return;
     }
     socket_.async_read_some(asio::buffer(abbBuf_), [this, id](const error_code& ec, std::size_t n) {
@@ -224,32 +263,40 @@ class SimRobot {
     });
   }
 
-  // Accumulates until ')' like socket_read_ascii_float; bytes after ')' stay for the next
-  // reply (and make it invalid, as they would confuse a UR program too).
-  void readUr(std::uint64_t id) {
-    const std::size_t close = rx_.find(')');
-    if (close != std::string::npos) {
-      std::string raw = rx_.substr(0, close + 1);
-      rx_.erase(0, close + 1);
+  // Bytes of rx_ that make one complete reply, or 0 while incomplete: ur up to ')' like
+  // socket_read_ascii_float, fanuc up to CR LF like KAREL's READ, binary 40 bytes.
+  std::size_t frameLength() const {
+    if (dialect_ == Dialect::Binary) return rx_.size() >= vgr::protocol::binary::kReplyBytes ? vgr::protocol::binary::kReplyBytes : 0;
+    const std::string_view end = dialect_ == Dialect::Ur ? ")" : "\r\n";
+    const std::size_t at = rx_.find(end);
+    return at == std::string::npos ? 0 : at + end.size();
+  }
+
+  // Accumulates until frameLength() says a reply is complete; bytes after it stay for the
+  // next reply (and make it invalid, as they would confuse a robot program too).
+  void readFramed(std::uint64_t id) {
+    if (const std::size_t n = frameLength(); n > 0) {
+      std::string raw = rx_.substr(0, n);
+      rx_.erase(0, n);
       replied(raw);
       return;
     }
-    if (rx_.size() >= kUrMaxReplyBytes) {
+    if (rx_.size() >= kMaxReplyBytes) {
       retire();
       std::string raw = std::move(rx_);
       rx_.clear();
-      record(raw, "no ')' within 1024 bytes");
+      record(raw, "no end of reply within 1024 bytes");
       reopen();
       return;
     }
-    socket_.async_read_some(asio::buffer(urChunk_), [this, id](const error_code& ec, std::size_t n) {
+    socket_.async_read_some(asio::buffer(chunk_), [this, id](const error_code& ec, std::size_t n) {
       if (id != exchangeId_ || done_) return;
       if (ec) {
         connectionLost(ec);
         return;
       }
-      rx_.append(urChunk_.data(), n);
-      readUr(id);
+      rx_.append(chunk_.data(), n);
+      readFramed(id);
     });
   }
 
@@ -310,12 +357,18 @@ class SimRobot {
     });
   }
 
-  // Prints and counts one reply (or one timeout, which is an invalid reply).
-  void record(const std::string& raw, const std::string& failure) {
+  // Prints and counts one reply (or one timeout, which is an invalid reply). Binary replies
+  // are shown as hex.
+  void record(const std::string& rawBytes, const std::string& failure) {
+    std::string raw = rawBytes;
+    if (dialect_ == Dialect::Binary) {
+      raw.clear();
+      for (const char c : rawBytes) raw += fmt::format("{:02x}", static_cast<unsigned char>(c));
+    }
     ++replies_;
     Parsed p;
     if (failure.empty()) {
-      p = parseReply(dialect_, raw);
+      p = parseReply(dialect_, rawBytes);
     } else {
       p.error = failure;
     }
@@ -382,7 +435,7 @@ class SimRobot {
   std::chrono::steady_clock::time_point connectDeadline_{};
   std::string request_;
   std::string rx_;                                               // ur: bytes read so far
-  std::array<char, 256> urChunk_{};                              // ur: one read
+  std::array<char, 256> chunk_{};                              // ur, fanuc, binary: one read
   std::array<char, vgr::protocol::kAbbMaxReplyChars> abbBuf_{};  // abb: one SocketReceive
   std::uint64_t exchangeId_ = 0;                                 // bumps retire the callbacks of a finished exchange
   std::uint64_t replies_ = 0, valid_ = 0, invalid_ = 0, ok_ = 0, reconnects_ = 0;
@@ -395,7 +448,7 @@ class SimRobot {
 int main(int argc, char** argv) {
   CLI::App app{"vgr-sim-robot: a UR or ABB robot program polling vgrd for poses, validating every reply"};
   Options opt;
-  app.add_option("--dialect", opt.dialect, "ur | abb")->required()->check(CLI::IsMember({"ur", "abb"}));
+  app.add_option("--dialect", opt.dialect, "ur | abb | fanuc | binary")->required()->check(CLI::IsMember({"ur", "abb", "fanuc", "binary"}));
   app.add_option("--name", opt.name, "robot name printed in the output (default: the dialect)");
   app.add_option("--host", opt.host, "vgrd address")->capture_default_str();
   app.add_option("--port", opt.port, "robot endpoint port")->required()->check(CLI::Range(1, 65535));

@@ -30,7 +30,7 @@ namespace vgr::test {
 class ModbusCell : public ::testing::Test {
  protected:
   using Clock = std::chrono::steady_clock;
-  static constexpr int kModbusPort = 1502, kUrPort = 50010, kAbbPort = 50011;
+  static constexpr int kModbusPort = 1502, kUrPort = 50010, kAbbPort = 50011, kFanucPort = 50012;
 
   static std::string bin(const std::string& name) { return std::string(VGR_BIN_DIR) + "/" + name; }
 
@@ -49,7 +49,7 @@ class ModbusCell : public ::testing::Test {
 
   // Call as ASSERT_NO_FATAL_FAILURE(startCell()).
   void startCell(const std::function<std::string(std::string)>& edit = nullptr) {
-    for (const int port : {kModbusPort, kUrPort, kAbbPort})
+    for (const int port : {kModbusPort, kUrPort, kAbbPort, kFanucPort})
       ASSERT_TRUE(portFree(port)) << "127.0.0.1:" << port << " is taken: another cell is running on this machine";
     dir_ = std::filesystem::temp_directory_path() / ("vgr-modbus-" + std::to_string(::getpid()) + "-" + std::to_string(counter_++));
     std::filesystem::create_directories(dir_);

@@ -602,8 +602,20 @@ TEST_F(robot_server, SimRobotAcceptsRealRepliesAndRejectsTheWrongDialect) {
   if (::access(VGR_BIN_DIR "/vgr-sim-robot", X_OK) != 0) {
     FAIL() << "vgr-sim-robot not built (tests/CMakeLists.txt builds it before the integration tests)";
   }
-  for (const auto& [dialect, port] :
-       {std::pair<std::string, std::uint16_t>{"ur", ur_->port()}, {"abb", abb_->port()}}) {
+  std::uint16_t fanucPort = 0, binaryPort = 0;
+  onIo([&] {
+    for (const auto& [name, dialect] : {std::pair{"fanuc-cell1", Dialect::Fanuc}, {"binary-cell1", Dialect::Binary}}) {
+      extra_.push_back(std::make_unique<RobotServer>(io_, endpoint(name, dialect, "127.0.0.1", 0, 8), handler()));
+      ASSERT_TRUE(extra_.back()->start());
+      (dialect == Dialect::Fanuc ? fanucPort : binaryPort) = extra_.back()->port();
+    }
+  });
+  ASSERT_NE(fanucPort, 0);
+  ASSERT_NE(binaryPort, 0);
+  for (const auto& [dialect, port] : {std::pair<std::string, std::uint16_t>{"ur", ur_->port()},
+                                      {"abb", abb_->port()},
+                                      {"fanuc", fanucPort},
+                                      {"binary", binaryPort}}) {
     const SimRun run = runSim(fmt::format("--dialect {} --port {} --count 3 --interval-ms 10", dialect, port));
     EXPECT_EQ(run.exitCode, 0) << dialect;
     ASSERT_EQ(run.lines.size(), 4u) << dialect;
@@ -633,6 +645,12 @@ TEST_F(robot_server, SimRobotAcceptsRealRepliesAndRejectsTheWrongDialect) {
   EXPECT_FALSE(wrong.lines[0].value("valid", true));
   EXPECT_EQ(wrong.lines[0].value("raw", ""), abbOk(1));
   EXPECT_EQ(wrong.lines[1].value("invalid", 0), 1);
+
+  // A FANUC program reading an ABB reply: no CR LF ever comes -> invalid.
+  const SimRun wrongFanuc = runSim(fmt::format("--dialect fanuc --port {} --count 1 --timeout-ms 300", abb_->port()));
+  EXPECT_EQ(wrongFanuc.exitCode, 1);
+  ASSERT_EQ(wrongFanuc.lines.size(), 2u);
+  EXPECT_FALSE(wrongFanuc.lines[0].value("valid", true));
 }
 
 }  // namespace

@@ -32,7 +32,7 @@ using std::chrono::milliseconds;
 using vgr::daemon::ChildProcess;
 using Clock = std::chrono::steady_clock;
 
-constexpr int kModbusPort = 1502, kUrPort = 50010, kAbbPort = 50011;
+constexpr int kModbusPort = 1502, kUrPort = 50010, kAbbPort = 50011, kFanucPort = 50012;
 
 std::string bin(const std::string& name) { return std::string(VGR_BIN_DIR) + "/" + name; }
 

@@ -29,11 +29,13 @@ TEST(CellConfig, ExampleIsValidAndTyped) {
   auto c = parseCellConfig(example(), "sim-cell.yaml");
   ASSERT_TRUE(c.has_value()) << c.error().message;
   EXPECT_EQ(c->modbus.port, 1502);
-  ASSERT_EQ(c->robots.size(), 2u);
+  ASSERT_EQ(c->robots.size(), 3u);
   EXPECT_EQ(c->robots[0].port, 50010);
   EXPECT_EQ(c->robots[0].dialect, vgr::config::Dialect::Ur);
   EXPECT_EQ(c->robots[1].port, 50011);
   EXPECT_EQ(c->robots[1].dialect, vgr::config::Dialect::Abb);
+  EXPECT_EQ(c->robots[2].port, 50012);
+  EXPECT_EQ(c->robots[2].dialect, vgr::config::Dialect::Fanuc);
   EXPECT_EQ(c->camera.address, "127.0.0.1");
   ASSERT_NE(c->findJob(1), nullptr);
   EXPECT_EQ(c->findJob(2), nullptr);

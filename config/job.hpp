@@ -1,0 +1,50 @@
+// Job folders (recipes, docs/localization.md "Jobs"): `job.yaml` + the template image +
+// derived model files. A job is what `vgr teach` writes and what `vgr locate`, `vgr eval`
+// and vgrd (cell config `jobs[].folder`) load. Parse -> validate; errors name the file,
+// the line and the key: "JOB/job.yaml:12: key 'regions[1].height_factor': expected ...".
+// Plain data, no images: the caller reads the template (templatePath()) and builds the
+// method with vision::makeLocator(method, template, taught).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "core/result.hpp"
+#include "vision/locate/locator.hpp"  // TaughtTemplate (plain structs; config links no vision code)
+
+namespace vgr::config {
+
+struct JobFile {
+  std::string folder;                      // the job folder it was loaded from / is written to
+  std::string name;                        // free text
+  std::string method = "moments";          // a name of vision::locatorMethods()
+  std::string templateImage = "template.png";  // relative to folder
+  // Grasp points in template px; the first is the one the locator transfers
+  // (taught.grasp), the others are kept for the robot program (e.g. alternative grips).
+  std::vector<vision::PixelPoint> grasps;
+  vision::TaughtTemplate taught;           // grasp, ROI, thresholds, regions, method params
+  double partHeightMm = 0;                 // mm, [0, 1000]: grasp height above the conveyor plane
+  // Reference pose the offsets are given from (robot base frame) and where the part lay in
+  // the template (px, deg): the taught pose.
+  double referenceXMm = 0, referenceYMm = 0, referenceZMm = 0, referenceRzDeg = 0;
+  // Optional: a cell config (relative to folder) whose `model` maps pixels to the robot
+  // frame; empty = not calibrated (vgr locate then reports pixels only).
+  std::string calibration;
+
+  std::string templatePath() const;
+  std::string calibrationPath() const;  // empty when calibration is empty
+};
+
+// Reads FOLDER/job.yaml. Errors: Status::BadArgument, "FILE:LINE: key 'k': what".
+Result<JobFile> loadJob(const std::string& folder);
+Result<JobFile> parseJob(const std::string& yamlText, const std::string& sourceName, const std::string& folder);
+
+// Writes FOLDER/job.yaml (the folder must exist). Round-trips through loadJob.
+Result<void> writeJob(const JobFile& job);
+std::string jobYaml(const JobFile& job);
+
+// Reads a `regions:` list in the job.yaml schema from any YAML file (e.g. a dataset's
+// template.yaml) for `vgr teach --regions`.
+Result<std::vector<vision::TemplateRegion>> loadRegions(const std::string& path);
+
+}  // namespace vgr::config

@@ -1,0 +1,308 @@
+#include "daemon/locate_eval.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <numeric>
+#include <sstream>
+
+#include <fmt/core.h>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <yaml-cpp/yaml.h>
+
+#include "config/job.hpp"
+#include "vision/calib/plane_model.hpp"
+#include "vision/locate/locator.hpp"
+
+namespace vgr::daemon {
+namespace {
+
+constexpr double kDegToRad = M_PI / 180.0;
+
+struct TruthPart {
+  double u = 0, v = 0, angleDeg = 0;
+  bool hasPose = false;  // x_mm, y_mm, rz_deg columns present (vgr sim render datasets)
+  double xMm = 0, yMm = 0, rzDeg = 0;
+};
+
+struct TruthImage {
+  std::string image;
+  std::vector<TruthPart> parts;  // empty = no part in the image
+};
+
+std::vector<std::string> splitCsv(const std::string& line) {
+  std::vector<std::string> out;
+  std::string cur;
+  for (char c : line) {
+    if (c == ',') {
+      out.push_back(cur);
+      cur.clear();
+    } else if (c != '\r') {
+      cur += c;
+    }
+  }
+  out.push_back(cur);
+  return out;
+}
+
+Result<std::vector<TruthImage>> readTruth(const std::string& folder) {
+  const std::string path = (std::filesystem::path(folder) / "truth.csv").string();
+  std::ifstream in(path);
+  if (!in) return fail(Status::BadArgument, path + ": cannot open");
+  std::string line;
+  if (!std::getline(in, line)) return fail(Status::BadArgument, path + ":1: empty file, expected the header image,x_px,y_px,angle_deg");
+  const auto header = splitCsv(line);
+  std::map<std::string, std::size_t> col;
+  for (std::size_t i = 0; i < header.size(); ++i) col[header[i]] = i;
+  for (const char* k : {"image", "x_px", "y_px", "angle_deg"})
+    if (!col.count(k)) return fail(Status::BadArgument, fmt::format("{}:1: header lacks the column '{}'", path, k));
+  const bool pose = col.count("x_mm") && col.count("y_mm") && col.count("rz_deg");
+  std::vector<TruthImage> out;
+  std::map<std::string, std::size_t> index;
+  int lineNo = 1;
+  while (std::getline(in, line)) {
+    ++lineNo;
+    if (line.empty() || line == "\r") continue;
+    const auto f = splitCsv(line);
+    if (f.size() < header.size()) return fail(Status::BadArgument, fmt::format("{}:{}: expected {} columns, got {}", path, lineNo, header.size(), f.size()));
+    const std::string& name = f[col["image"]];
+    auto it = index.find(name);
+    if (it == index.end()) {
+      it = index.emplace(name, out.size()).first;
+      out.push_back({name, {}});
+    }
+    if (f[col["x_px"]].empty()) continue;  // an image without a part
+    TruthPart p;
+    try {
+      p.u = std::stod(f[col["x_px"]]);
+      p.v = std::stod(f[col["y_px"]]);
+      p.angleDeg = std::stod(f[col["angle_deg"]]);
+      if (pose && !f[col["x_mm"]].empty()) {
+        p.xMm = std::stod(f[col["x_mm"]]);
+        p.yMm = std::stod(f[col["y_mm"]]);
+        p.rzDeg = std::stod(f[col["rz_deg"]]);
+        p.hasPose = true;
+      }
+    } catch (const std::exception&) {
+      return fail(Status::BadArgument, fmt::format("{}:{}: expected numbers in x_px, y_px, angle_deg", path, lineNo));
+    }
+    out[it->second].parts.push_back(p);
+  }
+  return out;
+}
+
+// What a `vgr sim render` dataset tells about its geometry, for paper 001's rates: the camera
+// (dataset.yaml), the template's crop offset, the heights of the part's levels and the grasp
+// height (template.yaml). Absent for other datasets.
+struct DatasetGeometry {
+  std::optional<vision::PinholePlaneModel> camera;
+  double offsetX = 0, offsetY = 0;
+  std::vector<double> heights;
+  double graspHeightMm = 0;
+  double fx = 0, cameraHeightMm = 0;
+};
+
+DatasetGeometry readGeometry(const std::string& folder) {
+  DatasetGeometry g;
+  try {
+    const YAML::Node ds = YAML::LoadFile((std::filesystem::path(folder) / "dataset.yaml").string());
+    const YAML::Node tp = YAML::LoadFile((std::filesystem::path(folder) / "template.yaml").string());
+    const YAML::Node cam = ds["camera"];
+    g.fx = cam["fx"].as<double>();
+    g.cameraHeightMm = cam["height_mm"].as<double>();
+    g.camera.emplace(g.fx, cam["fy"].as<double>(), cam["cx"].as<double>(), cam["cy"].as<double>(),
+                     vision::PinholePlaneModel::downLookingCamera(0, 0, g.cameraHeightMm, 0), 0.0);
+    g.offsetX = tp["crop_offset"]["x_px"].as<double>();
+    g.offsetY = tp["crop_offset"]["y_px"].as<double>();
+    g.graspHeightMm = tp["grasp_height_mm"].as<double>();
+    for (const auto& r : tp["regions"]) g.heights.push_back(r["height_mm"].as<double>());
+    if (g.heights.empty()) g.heights.push_back(g.graspHeightMm);
+  } catch (const YAML::Exception&) {
+    g.camera.reset();  // not a vgr sim render dataset: fall back to the grasp-level similarity
+  }
+  return g;
+}
+
+double angleDiff(double a, double b) { return std::abs(std::remainder(a - b, 360.0)); }
+
+// Is a feature match correct? Its template point, on any of the part's levels, carried by
+// the truth pose into the image, lands within tol of the matched image point. Without the
+// dataset's geometry: the similarity about the grasp point (exact for flat parts).
+bool matchIsTrue(const vision::MatchPair& m, const TruthPart& t, const vision::PixelPoint& graspTpl,
+                 const DatasetGeometry& g, double tol) {
+  if (g.camera && t.hasPose) {
+    const double c = std::cos(t.rzDeg * kDegToRad), s = std::sin(t.rzDeg * kDegToRad);
+    for (double h : g.heights) {
+      const auto q = g.camera->pixelToPlane({m.templatePx.u + g.offsetX, m.templatePx.v + g.offsetY}, h);
+      if (!q) continue;
+      const auto px = g.camera->project({t.xMm + c * q->x - s * q->y, t.yMm + s * q->x + c * q->y, h});
+      if (px && std::hypot(px->u - m.imagePx.u, px->v - m.imagePx.v) <= tol) return true;
+    }
+    return false;
+  }
+  const double a = t.angleDeg * kDegToRad;
+  const double dx = m.templatePx.u - graspTpl.u, dy = m.templatePx.v - graspTpl.v;
+  const double u = t.u + dx * std::cos(a) + dy * std::sin(a);
+  const double v = t.v - dx * std::sin(a) + dy * std::cos(a);
+  return std::hypot(u - m.imagePx.u, v - m.imagePx.v) <= tol;
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+double mean(const std::vector<double>& v) { return v.empty() ? 0 : std::accumulate(v.begin(), v.end(), 0.0) / v.size(); }
+double maxOf(const std::vector<double>& v) { return v.empty() ? 0 : *std::max_element(v.begin(), v.end()); }
+
+}  // namespace
+
+Result<EvalReport> evaluate(const EvalOptions& o) {
+  auto job = config::loadJob(o.jobFolder);
+  if (!job) return std::unexpected(job.error());
+  const std::string method = o.method.empty() ? job->method : o.method;
+  const cv::Mat templ = cv::imread(job->templatePath(), cv::IMREAD_GRAYSCALE);
+  if (templ.empty()) return fail(Status::BadArgument, job->templatePath() + ": cannot read the template image");
+  auto locator = vision::makeLocator(method, templ, job->taught);
+  if (!locator) return std::unexpected(locator.error());
+  auto truth = readTruth(o.datasetFolder);
+  if (!truth) return std::unexpected(truth.error());
+  const DatasetGeometry geo = readGeometry(o.datasetFolder);
+
+  EvalReport rep;
+  rep.method = method;
+  int graspTp = 0, graspN = 0;
+  const std::size_t count = o.limit > 0 ? std::min<std::size_t>(o.limit, truth->size()) : truth->size();
+  for (std::size_t i = 0; i < count; ++i) {
+    const TruthImage& ti = (*truth)[i];
+    const std::string path = (std::filesystem::path(o.datasetFolder) / ti.image).string();
+    const cv::Mat img = cv::imread(path, cv::IMREAD_GRAYSCALE);
+    if (img.empty()) return fail(Status::BadArgument, path + ": cannot read the image");
+    const auto t0 = std::chrono::steady_clock::now();
+    auto out = (*locator)->locate(img);
+    rep.timeMs.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    if (!out) return fail(out.error().code, fmt::format("{}: {}", path, out.error().message));
+    const auto& dets = out->parts;
+    ++rep.images;
+    if (dets.size() == ti.parts.size()) ++rep.countCorrectImages;
+    if (ti.parts.empty()) {
+      ++rep.emptyImages;
+      ++rep.n;
+      if (dets.empty()) ++rep.successes;
+      rep.falsePositives += static_cast<int>(dets.size());
+      continue;
+    }
+    // Truth parts and detections paired by nearest grasp point, closest pairs first.
+    std::vector<std::tuple<double, std::size_t, std::size_t>> pairs;
+    for (std::size_t a = 0; a < ti.parts.size(); ++a)
+      for (std::size_t b = 0; b < dets.size(); ++b)
+        pairs.emplace_back(std::hypot(ti.parts[a].u - dets[b].u, ti.parts[a].v - dets[b].v), a, b);
+    std::sort(pairs.begin(), pairs.end());
+    std::vector<int> truthTo(ti.parts.size(), -1), detTo(dets.size(), -1);
+    for (const auto& [d, a, b] : pairs) {
+      if (truthTo[a] >= 0 || detTo[b] >= 0) continue;
+      truthTo[a] = static_cast<int>(b);
+      detTo[b] = static_cast<int>(a);
+    }
+    rep.falsePositives += static_cast<int>(std::count(detTo.begin(), detTo.end(), -1));
+    for (std::size_t a = 0; a < ti.parts.size(); ++a) {
+      ++rep.n;
+      ++rep.parts;
+      if (truthTo[a] < 0) {
+        ++rep.missed;
+        ++graspN;
+        continue;
+      }
+      const auto& d = dets[static_cast<std::size_t>(truthTo[a])];
+      const double pe = std::hypot(d.u - ti.parts[a].u, d.v - ti.parts[a].v);
+      const double ae = angleDiff(d.angleDeg, ti.parts[a].angleDeg);
+      rep.posErrPx.push_back(pe);
+      rep.angErrDeg.push_back(ae);
+      if (pe <= o.posTolPx && ae <= o.angTolDeg) ++rep.successes;
+      if (geo.camera) {
+        const double mmPerPx = (geo.cameraHeightMm - geo.graspHeightMm) / geo.fx;
+        ++graspN;
+        if (pe * mmPerPx < o.graspTpMm && ae < o.graspTpDeg) ++graspTp;
+      }
+      // The matches belong to the best part (dets[0]).
+      if (truthTo[a] == 0)
+        for (const auto& m : out->matches) {
+          ++rep.matchesTotal;
+          if (matchIsTrue(m, ti.parts[a], job->taught.grasp, geo, o.matchTolPx)) ++rep.matchesTrue;
+        }
+    }
+  }
+  if (geo.camera && graspN > 0) rep.graspTpRate = double(graspTp) / graspN;
+  return rep;
+}
+
+std::string evalJson(const EvalReport& r, const EvalOptions& o) {
+  nlohmann::ordered_json j;
+  j["method"] = r.method;
+  j["n"] = r.n;
+  j["images"] = r.images;
+  j["parts"] = r.parts;
+  j["empty_images"] = r.emptyImages;
+  j["success_rate"] = r.successRate();
+  j["pos_tol_px"] = o.posTolPx;
+  j["ang_tol_deg"] = o.angTolDeg;
+  j["pos_err_px_mean"] = mean(r.posErrPx);
+  j["pos_err_px_max"] = maxOf(r.posErrPx);
+  j["ang_err_deg_mean"] = mean(r.angErrDeg);
+  j["ang_err_deg_max"] = maxOf(r.angErrDeg);
+  j["time_ms_median"] = median(r.timeMs);
+  j["time_ms_max"] = maxOf(r.timeMs);
+  j["missed"] = r.missed;
+  j["false_positives"] = r.falsePositives;
+  j["count_correct_rate"] = r.images ? double(r.countCorrectImages) / r.images : 0.0;
+  if (r.matchesTotal > 0) {
+    j["match_tp_rate"] = double(r.matchesTrue) / r.matchesTotal;
+    j["matches"] = r.matchesTotal;
+  } else {
+    j["match_tp_rate"] = nullptr;  // not a feature method
+  }
+  if (r.graspTpRate) j["grasp_tp_rate"] = *r.graspTpRate;
+  return j.dump();
+}
+
+Result<void> plotErrors(const EvalReport& r, const EvalOptions& o, const std::string& path) {
+  // Two panels like paper 000, Fig. 7: errors of all matched parts sorted ascending, position
+  // (px) left and angle (deg) right, each with its tolerance as a dashed line.
+  constexpr int kW = 520, kH = 360, kPad = 50;
+  cv::Mat img(kH, 2 * kW, CV_8UC3, cv::Scalar(255, 255, 255));
+  auto panel = [&](int x0, std::vector<double> v, double tol, const std::string& title, const std::string& unit) {
+    std::sort(v.begin(), v.end());
+    const double top = std::max({tol * 2, v.empty() ? 0.0 : v.back() * 1.05, 1e-6});
+    const cv::Rect area(x0 + kPad, 30, kW - kPad - 20, kH - 30 - kPad);
+    cv::rectangle(img, area, cv::Scalar(0, 0, 0), 1);
+    auto yOf = [&](double e) { return area.y + area.height - static_cast<int>(std::min(e, top) / top * area.height); };
+    for (int k = 0; k <= 4; ++k) {
+      const double e = top * k / 4;
+      cv::putText(img, fmt::format("{:.2f}", e), {x0 + 4, yOf(e) + 4}, cv::FONT_HERSHEY_SIMPLEX, 0.35, cv::Scalar(0, 0, 0));
+    }
+    for (int x = area.x; x < area.x + area.width; x += 8)
+      cv::line(img, {x, yOf(tol)}, {std::min(x + 4, area.x + area.width), yOf(tol)}, cv::Scalar(0, 0, 200), 1);
+    for (std::size_t i = 1; i < v.size(); ++i) {
+      const auto xOf = [&](std::size_t k) { return area.x + static_cast<int>(double(k) / std::max<std::size_t>(1, v.size() - 1) * area.width); };
+      cv::line(img, {xOf(i - 1), yOf(v[i - 1])}, {xOf(i), yOf(v[i])}, cv::Scalar(180, 60, 0), 2, cv::LINE_AA);
+    }
+    cv::putText(img, fmt::format("{} ({}), {}: {} parts", title, unit, r.method, v.size()), {area.x, 20},
+                cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+    cv::putText(img, "sample (sorted by error)", {area.x + area.width / 3, kH - 15}, cv::FONT_HERSHEY_SIMPLEX, 0.4,
+                cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  };
+  panel(0, r.posErrPx, o.posTolPx, "position error", "px");
+  panel(kW, r.angErrDeg, o.angTolDeg, "angle error", "deg");
+  if (!cv::imwrite(path, img)) return fail(Status::BadArgument, path + ": cannot write the plot");
+  return {};
+}
+
+}  // namespace vgr::daemon

@@ -1,0 +1,49 @@
+// `vgr eval`: runs a job's method over a dataset (docs/datasets.md) and scores it against the
+// truth (docs/localization.md "Evaluation"). Offline tool code, one thread.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/result.hpp"
+
+namespace vgr::daemon {
+
+struct EvalOptions {
+  std::string jobFolder;
+  std::string datasetFolder;
+  std::string method;         // empty = the job's
+  double posTolPx = 4;        // paper 000: success at <= 4 px ...
+  double angTolDeg = 0.5;     // ... and <= 0.5 deg
+  double matchTolPx = 5;      // paper 001's 5 px boundary: a feature match within this of its true place is correct
+  double graspTpMm = 3, graspTpDeg = 2;  // paper 001's true positive: < 3 mm and < 2 deg
+  int limit = 0;              // evaluate the first N images only; 0 = all
+  std::string plotPath;       // sorted error curves (paper 000, Fig. 7); empty = none
+};
+
+struct EvalReport {
+  std::string method;
+  int n = 0;                  // samples: truth parts + images without a part
+  int images = 0, emptyImages = 0, parts = 0;
+  int successes = 0;
+  int missed = 0;             // truth parts with no detection matched to them
+  int falsePositives = 0;     // detections not matched to a truth part (incl. on empty images)
+  int countCorrectImages = 0; // images whose detection count equals their truth count
+  std::vector<double> posErrPx, angErrDeg, timeMs;  // per matched part / per image
+  long matchesTotal = 0, matchesTrue = 0;           // feature methods
+  std::optional<double> graspTpRate;                // when the dataset gives the scale (dataset.yaml)
+
+  double successRate() const { return n ? double(successes) / n : 0; }
+};
+
+Result<EvalReport> evaluate(const EvalOptions& options);
+
+// One JSON object (no newline) with the keys of issue 6: n, success_rate, pos_err_px_mean,
+// pos_err_px_max, ang_err_deg_mean, ang_err_deg_max, time_ms_median, and the rest.
+std::string evalJson(const EvalReport& report, const EvalOptions& options);
+
+// Draws the sorted position and angle error curves (paper 000, Fig. 7) into a PNG.
+Result<void> plotErrors(const EvalReport& report, const EvalOptions& options, const std::string& path);
+
+}  // namespace vgr::daemon

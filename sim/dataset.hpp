@@ -1,0 +1,32 @@
+// Writes a localization dataset (docs/datasets.md) from the PartSceneRenderer: images,
+// truth.csv, the template to teach on (template.png + template.yaml) and dataset.yaml (the
+// options it was made with). Used by `vgr sim render`; start-up style I/O, one thread.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "core/result.hpp"
+#include "sim/part_scene.hpp"
+
+namespace vgr::sim {
+
+struct DatasetOptions {
+  std::string outDir;
+  int count = 100;            // images
+  std::string part = "multi";  // "flat" or "multi"
+  int levels = 3;             // multi: height levels [2, 4]
+  PartSceneOptions scene;
+};
+
+struct DatasetSummary {
+  int images = 0, emptyImages = 0, parts = 0;
+};
+
+// Creates outDir (and parents) if needed; overwrites files of the same names.
+Result<DatasetSummary> writeDataset(const DatasetOptions& options);
+
+// The renderer a dataset's options describe (shared with tests).
+PartSceneRenderer datasetRenderer(const DatasetOptions& options);
+
+}  // namespace vgr::sim
