@@ -137,7 +137,13 @@ Result<double> selfMatchInliers(const cv::Mat& templateGray, const Features& tmp
   cv::Mat turned;
   cv::warpAffine(templateGray, turned, R, cv::Size(static_cast<int>(std::ceil(box.width)), static_cast<int>(std::ceil(box.height))),
                  cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(fill));
-  const Features img = detectOrb(turned, cv::Mat(), orb.imageFeatures, orb);
+  // Sensor noise as on a typical live image (sigma 5 gray levels, fixed seed): the
+  // reference is what a good live image gives, not what a noise-free copy gives.
+  cv::Mat noise(turned.size(), CV_16S);
+  cv::RNG(0x5eed).fill(noise, cv::RNG::NORMAL, 0.0, 5.0);
+  cv::Mat noisy;
+  cv::add(turned, noise, noisy, cv::noArray(), CV_8U);
+  const Features img = detectOrb(noisy, cv::Mat(), orb.imageFeatures, orb);
   const std::vector<char> alive(img.keypoints.size(), 1);
   const auto candidates = matchBidirectional(tmpl, img, alive, search.mu, search.minDFloor);
   const auto found = candidates.size() >= 4 ? fit(candidates, tmpl, img) : std::nullopt;
@@ -147,7 +153,7 @@ Result<double> selfMatchInliers(const cv::Mat& templateGray, const Features& tmp
                 fmt::format("{}: the template does not find itself turned by 30 degrees ({} matches accepted, {} needed): "
                             "too few ORB features (texture) in the template",
                             search.method, n, search.minInliers));
-  return n;
+  return 0.5 * n;
 }
 
 Result<LocateOutput> locateFeatureParts(const cv::Mat& gray, const TaughtTemplate& taught, const Features& tmpl,
@@ -160,6 +166,9 @@ Result<LocateOutput> locateFeatureParts(const cv::Mat& gray, const TaughtTemplat
   if (roi.empty()) return out;
   const Features img = detectOrb(gray(roi), cv::Mat(), orb.imageFeatures, orb);
   std::vector<char> alive(img.keypoints.size(), 1);
+  cv::Point2f hullCentre;
+  float hullRadius = 0;
+  if (!templateHull.empty()) cv::minEnclosingCircle(templateHull, hullCentre, hullRadius);
 
   struct Found {
     Detection d;
@@ -190,6 +199,12 @@ Result<LocateOutput> locateFeatureParts(const cv::Mat& gray, const TaughtTemplat
     f.d.v += roi.y;
     f.d.score = std::clamp(static_cast<double>(fitted->accepted.size()) / search.fullScoreInliers, 0.0, 1.0);
     if (f.d.score < taught.minScore || f.d.angleDeg < taught.angleMinDeg || f.d.angleDeg > taught.angleMaxDeg) continue;
+    // A second fit on the same part (the rest of a part whose features at another height
+    // disagree with the first fit) is not another part.
+    const bool duplicate = std::any_of(found.begin(), found.end(), [&](const Found& o) {
+      return std::hypot(o.d.u - f.d.u, o.d.v - f.d.v) < 0.5 * hullRadius;
+    });
+    if (duplicate) continue;
     f.candidates = static_cast<int>(candidates.size());
     for (const Match& m : fitted->accepted) {
       const cv::Point2f tp = tmpl.keypoints[static_cast<size_t>(m.t)].pt;

@@ -33,7 +33,7 @@ struct OrbParams {
   int imageFeatures = 6000;     // [50, 50000] keypoints kept in the searched image
   double scaleFactor = 1.2;     // (1, 2] pyramid step
   int levels = 3;               // [1, 8] pyramid levels (parts are seen at one scale)
-  int fastThreshold = 12;       // [1, 100] FAST-9 gray-level difference (eps_d of paper 001 eq. 9)
+  int fastThreshold = 20;       // [1, 100] FAST-9 gray-level difference (eps_d of paper 001 eq. 9)
 };
 void readOrbParams(ParamReader& r, OrbParams& p);
 
@@ -85,17 +85,18 @@ struct FeatureSearch {
   double fullScoreInliers = 0;  // accepted matches that score 1 (set at teach time)
 };
 
-// The teach-time reference for the score: the method's own pipeline run on the template
-// against a copy of itself turned by 30 degrees. Errors name the method when the template
-// has too few features to find itself.
+// The teach-time reference for the score: half the matches the method's own pipeline
+// accepts between the template and a copy of itself turned by 30 degrees with sensor noise
+// (sigma 5). Errors name the method when the template has too few features to find itself.
 Result<double> selfMatchInliers(const cv::Mat& templateGray, const Features& tmpl, const OrbParams& orb,
                                 const FeatureSearch& search, const FitFn& fit);
 
 // Several parts per image: detect ORB once in the search ROI, then repeat {match the
 // template against the image keypoints not yet taken, fit, accept} until maxParts parts
 // are found or the fit fails; after each fit the image keypoints inside the template's
-// outline (its keypoints' convex hull through H) are taken away. score = accepted matches /
-// fullScoreInliers, clipped to [0, 1]. LocateOutput::matches are the best part's accepted
+// outline (its keypoints' convex hull through H) are taken away; a fit whose grasp point lies
+// within half the outline's radius of an earlier part's is the same part again and dropped.
+// score = accepted matches / fullScoreInliers, clipped to [0, 1]. LocateOutput::matches are the best part's accepted
 // matches, candidateMatches the candidates that part was fitted from.
 Result<LocateOutput> locateFeatureParts(const cv::Mat& gray, const TaughtTemplate& taught, const Features& tmpl,
                                         const std::vector<cv::Point2f>& templateHull, const OrbParams& orb,
