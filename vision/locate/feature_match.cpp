@@ -95,6 +95,26 @@ std::vector<Match> matchBidirectional(const Features& tmpl, const Features& img,
   return out;
 }
 
+std::vector<Match> matchNearest(const Features& tmpl, const Features& img, const std::vector<char>& alive) {
+  std::vector<int> index;
+  for (size_t k = 0; k < img.keypoints.size(); ++k)
+    if (alive[k]) index.push_back(static_cast<int>(k));
+  if (index.size() < 2 || tmpl.descriptors.rows < 2) return {};
+  cv::Mat imgDesc(static_cast<int>(index.size()), img.descriptors.cols, img.descriptors.type());
+  for (size_t r = 0; r < index.size(); ++r) img.descriptors.row(index[r]).copyTo(imgDesc.row(static_cast<int>(r)));
+  const auto forward = flannNearest(tmpl.descriptors, imgDesc);
+  std::vector<Match> out;
+  for (size_t t = 0; t < forward.size(); ++t)
+    if (forward[t].first >= 0) out.push_back({static_cast<int>(t), index[static_cast<size_t>(forward[t].first)], forward[t].second});
+  std::stable_sort(out.begin(), out.end(), [](const Match& a, const Match& b) { return a.distance < b.distance; });
+  return out;
+}
+
+std::vector<Match> coarseMatches(const Features& tmpl, const Features& img, const std::vector<char>& alive,
+                                 const FeatureSearch& search) {
+  return search.symmetric ? matchBidirectional(tmpl, img, alive, search.mu, search.minDFloor) : matchNearest(tmpl, img, alive);
+}
+
 bool poseFromHomography(const cv::Matx33d& H, PixelPoint grasp, double maxScale, Detection& out) {
   const cv::Vec3d p = H * cv::Vec3d(grasp.u, grasp.v, 1.0);
   if (std::abs(p[2]) < 1e-9) return false;
@@ -145,7 +165,7 @@ Result<double> selfMatchInliers(const cv::Mat& templateGray, const Features& tmp
   cv::add(turned, noise, noisy, cv::noArray(), CV_8U);
   const Features img = detectOrb(noisy, cv::Mat(), orb.imageFeatures, orb);
   const std::vector<char> alive(img.keypoints.size(), 1);
-  const auto candidates = matchBidirectional(tmpl, img, alive, search.mu, search.minDFloor);
+  const auto candidates = coarseMatches(tmpl, img, alive, search);
   const auto found = candidates.size() >= 4 ? fit(candidates, tmpl, img) : std::nullopt;
   const double n = found ? static_cast<double>(found->accepted.size()) : 0.0;
   if (n < search.minInliers)
@@ -180,7 +200,7 @@ Result<LocateOutput> locateFeatureParts(const cv::Mat& gray, const TaughtTemplat
   // Each round takes at least the accepted keypoints away, so this ends; a few extra rounds
   // allow for fits that are rejected (out of the angle range, too weak) before a real part.
   for (int round = 0; round < taught.maxParts + 3 && static_cast<int>(found.size()) < taught.maxParts; ++round) {
-    const auto candidates = matchBidirectional(tmpl, img, alive, search.mu, search.minDFloor);
+    const auto candidates = coarseMatches(tmpl, img, alive, search);
     if (static_cast<int>(candidates.size()) < std::max(4, search.minInliers)) break;
     const auto fitted = fit(candidates, tmpl, img);
     if (!fitted || static_cast<int>(fitted->accepted.size()) < search.minInliers) break;

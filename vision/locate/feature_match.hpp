@@ -19,6 +19,8 @@
 
 namespace vgr::vision::detail {
 
+struct FeatureSearch;
+
 // Angle in degrees mapped to (-180, 180].
 double normaliseDeg(double a);
 
@@ -59,6 +61,9 @@ struct Match {
 // Result sorted by distance, best first (the order PROSAC needs).
 std::vector<Match> matchBidirectional(const Features& tmpl, const Features& img, const std::vector<char>& alive,
                                       double mu, double minDFloor);
+// The plain alternative (FeatureSearch::symmetric = false): each template keypoint's FLANN
+// nearest neighbour among the free image keypoints, no distance gate, no symmetric check.
+std::vector<Match> matchNearest(const Features& tmpl, const Features& img, const std::vector<char>& alive);
 
 // Paper 001, eq. (15): the template's grasp point through the homography H (template px ->
 // image px), and the rotation of H at that point, counter-clockwise as displayed, in
@@ -83,7 +88,12 @@ struct FeatureSearch {
   int minInliers = 12;     // fewer accepted matches: not a part
   double maxScale = 1.25;  // see poseFromHomography
   double fullScoreInliers = 0;  // accepted matches that score 1 (set at teach time)
+  bool symmetric = true;   // paper 001's coarse stage; false = plain nearest neighbour template -> image
 };
+
+// The one the search asks for.
+std::vector<Match> coarseMatches(const Features& tmpl, const Features& img, const std::vector<char>& alive,
+                                 const FeatureSearch& search);
 
 // The teach-time reference for the score: half the matches the method's own pipeline
 // accepts between the template and a copy of itself turned by 30 degrees with sensor noise
