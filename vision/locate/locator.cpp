@@ -12,6 +12,7 @@
 #include "vision/locate/orb_adk_locator.hpp"
 #include "vision/locate/orb_homography_locator.hpp"
 #include "vision/locate/params.hpp"
+#include "vision/locate/shape_matcher.hpp"
 
 namespace vgr::vision {
 
@@ -144,13 +145,14 @@ Result<std::unique_ptr<Locator>> makeLocator(std::string_view method, const cv::
   if (method == "orb-prosac") return makeOrbProsacLocator(templateGray, taught);
   if (method == "orb-adk") return makeOrbAdkLocator(templateGray, taught);
   if (method == "contour-weighted") return makeContourWeightedLocator(templateGray, taught);
+  if (method == "shape") return makeShapeLocator(templateGray, taught);
   std::string known;
   for (const auto& m : locatorMethods()) known += (known.empty() ? "" : ", ") + m;
   return fail(Status::BadArgument, fmt::format("unknown locate method '{}' (known: {})", method, known));
 }
 
 const std::vector<std::string>& locatorMethods() {
-  static const std::vector<std::string> kMethods{"moments", "orb-ransac", "orb-prosac", "orb-adk", "contour-weighted"};
+  static const std::vector<std::string> kMethods{"moments", "orb-ransac", "orb-prosac", "orb-adk", "contour-weighted", "shape"};
   return kMethods;
 }
 
