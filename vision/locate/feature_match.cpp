@@ -199,11 +199,18 @@ Result<LocateOutput> locateFeatureParts(const cv::Mat& gray, const TaughtTemplat
   const cv::Point2f offset(static_cast<float>(roi.x), static_cast<float>(roi.y));
   // Each round takes at least the accepted keypoints away, so this ends; a few extra rounds
   // allow for fits that are rejected (out of the angle range, too weak) before a real part.
-  for (int round = 0; round < taught.maxParts + 3 && static_cast<int>(found.size()) < taught.maxParts; ++round) {
+  int misses = 0;  // rounds whose fit was too weak: after three in a row the image is done
+  for (int round = 0; round < 2 * taught.maxParts + 4 && static_cast<int>(found.size()) < taught.maxParts; ++round) {
     const auto candidates = coarseMatches(tmpl, img, alive, search);
     if (static_cast<int>(candidates.size()) < std::max(4, search.minInliers)) break;
     const auto fitted = fit(candidates, tmpl, img);
-    if (!fitted || static_cast<int>(fitted->accepted.size()) < search.minInliers) break;
+    if (!fitted) break;
+    if (static_cast<int>(fitted->accepted.size()) < search.minInliers) {
+      if (fitted->consumed.empty() || ++misses >= 3) break;
+      for (int i : fitted->consumed) alive[static_cast<size_t>(i)] = 0;
+      continue;
+    }
+    misses = 0;
 
     // Take away the image keypoints of this part: inside the template outline through H
     // (grown by 4 px) and every accepted one.

@@ -76,6 +76,9 @@ bool poseFromHomography(const cv::Matx33d& H, PixelPoint grasp, double maxScale,
 struct PartFit {
   cv::Matx33d H;
   std::vector<Match> accepted;
+  // Image keypoints (indices) this fit used up even if it is rejected (e.g. PROSAC's inliers
+  // when ADK's cluster is too small), so the next round looks elsewhere.
+  std::vector<int> consumed;
 };
 // candidates index into tmpl's and img's keypoints.
 using FitFn = std::function<std::optional<PartFit>(const std::vector<Match>& candidates, const Features& tmpl,
