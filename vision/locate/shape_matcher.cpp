@@ -5,9 +5,6 @@
 #include <map>
 #include <string>
 #include <numbers>
-#include <cstdio>
-#include <chrono>
-#include <cstdlib>
 
 #include <Eigen/Dense>
 #include <fmt/core.h>
@@ -108,10 +105,6 @@ class ShapeLocator final : public Locator {
     rx_.resize(maxPts), ry_.resize(maxPts), rnx_.resize(maxPts), rny_.resize(maxPts);
     ix_.resize(maxPts), iy_.resize(maxPts);
     workers_.resize(static_cast<std::size_t>(p_.workers));
-    if (std::getenv("VGR_SHAPE_DEBUG")) {
-      for (const auto& l : m_.levels) std::fprintf(stderr, "level: %d pts r=%.1f step=%.2fdeg\n", l.size(), l.radius, l.angleStep * 180 / M_PI);
-      std::fprintf(stderr, "top angles %zu\n", rotated_.size());
-    }
   }
 
   std::string_view method() const override { return "shape"; }
@@ -128,6 +121,7 @@ class ShapeLocator final : public Locator {
   void prepare(cv::Size roiSize);
   void searchTop(Worker& w, int first, int stride, double thr);
   void levelGradients(int level, const Candidate& c, double extra);
+  void smoothGradients(const Candidate& c);
   double scoreAt(int level, int x, int y, int& sign) const;
   void rotateModel(int level, double phi);
   bool trackDown(int level, Candidate& c, double thr);
@@ -302,15 +296,20 @@ void ShapeLocator::levelGradients(int level, const Candidate& c, double extra) {
     }
   }
   (void)inner;
-  if (level == 0 && p_.refine) {
-    // Smoothed gradient for the sub-pixel edge positions (sigma 1 px, like the model's).
-    const cv::Rect wide = cv::Rect(win.x - 4, win.y - 4, win.width + 8, win.height + 8) & full;
-    cv::Mat f = f32_(wide), b = blur_(wide), sx = sgx_(wide), sy = sgy_(wide);
-    img(wide).convertTo(f, CV_32F);
-    cv::GaussianBlur(f, b, cv::Size(7, 7), 1.0, 1.0, kBorderFlags);
-    cv::Sobel(b, sx, CV_32F, 1, 0, 3, 1.0 / 8, 0, kBorderFlags);
-    cv::Sobel(b, sy, CV_32F, 0, 1, 3, 1.0 / 8, 0, kBorderFlags);
-  }
+}
+
+// The smoothed level-0 gradient around c for the refinement (sigma 1 px, like the model's).
+void ShapeLocator::smoothGradients(const Candidate& c) {
+  const cv::Mat& img = pyr_[0];
+  const int r = static_cast<int>(std::ceil(m_.levels[0].radius)) + 8;
+  const cv::Rect full(0, 0, img.cols, img.rows);
+  const cv::Rect wide = cv::Rect(cvRound(c.x) - r, cvRound(c.y) - r, 2 * r + 1, 2 * r + 1) & full;
+  if (wide.empty()) return;
+  cv::Mat f = f32_(wide), b = blur_(wide), sx = sgx_(wide), sy = sgy_(wide);
+  img(wide).convertTo(f, CV_32F);
+  cv::GaussianBlur(f, b, cv::Size(7, 7), 1.0, 1.0, kBorderFlags);
+  cv::Sobel(b, sx, CV_32F, 1, 0, 3, 1.0 / 8, 0, kBorderFlags);
+  cv::Sobel(b, sy, CV_32F, 0, 1, 3, 1.0 / 8, 0, kBorderFlags);
 }
 
 void ShapeLocator::rotateModel(int level, double phi) {
@@ -478,18 +477,9 @@ Result<LocateOutput> ShapeLocator::locate(const cv::Mat& gray) {
   if (roi.width < 2 * minSide || roi.height < 2 * minSide) return out;
   prepare(roi.size());
 
-  const bool dbg = std::getenv("VGR_SHAPE_DEBUG") != nullptr;
-  auto tick = std::chrono::steady_clock::now();
-  auto mark = [&](const char* what) {
-    if (!dbg) return;
-    const auto now = std::chrono::steady_clock::now();
-    std::fprintf(stderr, "  %s %.2f ms\n", what, std::chrono::duration<double, std::milli>(now - tick).count());
-    tick = now;
-  };
   pyr_[0] = gray(roi);
   for (int l = 1; l <= top; ++l) cv::pyrDown(pyr_[l - 1], pyr_[l], pyr_[l].size(), cv::BORDER_REPLICATE);
 
-  mark("pyramid");
   // Top level: full gradient, unit directions into the zero-padded planes.
   {
     cv::Sobel(pyr_[top], gx_[top], CV_32F, 1, 0, 3, 1.0 / 8, 0, cv::BORDER_REPLICATE);
@@ -510,7 +500,6 @@ Result<LocateOutput> ShapeLocator::locate(const cv::Mat& gray) {
       }
     }
   }
-  mark("top gradient");
   const double minScore = taught_.minScore;
   const double coarseThr = minScore * kCoarseSlack;
   const int nw = static_cast<int>(workers_.size());
@@ -521,8 +510,6 @@ Result<LocateOutput> ShapeLocator::locate(const cv::Mat& gray) {
   cands_.clear();
   for (const Worker& w : workers_) cands_.insert(cands_.end(), w.found.begin(), w.found.end());
   const std::size_t keep = static_cast<std::size_t>(4 * taught_.maxParts + 4);
-  mark("top search");
-  if (dbg) std::fprintf(stderr, "top candidates %zu\n", cands_.size());
   suppress(cands_, 1.5, 1.5 * topStep_, keep);
 
   for (int l = top - 1; l >= 0; --l) {
@@ -531,38 +518,33 @@ Result<LocateOutput> ShapeLocator::locate(const cv::Mat& gray) {
       if (trackDown(l, c, l == 0 ? minScore : coarseThr)) next_.push_back(c);
     suppress(next_, 2.0, 2.5 * m_.levels[l].angleStep, keep);
     cands_.swap(next_);
-    mark("level");
   }
 
-  // Full resolution: sub-pixel pose for each survivor, then overlap control.
+  // Full resolution, best first: overlap control, then the sub-pixel pose, until maxParts.
+  // Only parts that make the output pay for the refinement.
+  std::sort(cands_.begin(), cands_.end(), [](const Candidate& l, const Candidate& r) { return l.score > r.score; });
   next_.clear();
-  for (Candidate c : cands_) {
-    if (top == 0) {
-      // Single level: no tracking happened; gradients and the peak come from here.
-      levelGradients(0, c, 3.0);
-    } else {
-      levelGradients(0, c, 3.0);
-    }
-    interpolatePeak(c);
-    if (p_.refine) refine(c);
-    if (c.score >= minScore) next_.push_back(c);
-  }
-  mark("subpixel");
-  std::sort(next_.begin(), next_.end(), [](const Candidate& l, const Candidate& r) { return l.score > r.score; });
-  std::vector<Detection>& parts = out.parts;
-  std::vector<Candidate> kept;
-  for (const Candidate& c : next_) {
-    bool overlaps = false;
-    for (const Candidate& k : kept) {
+  const double tol = m_.levels[0].angleStep * 180 / std::numbers::pi;
+  auto overlapsKept = [&](const Candidate& c) {
+    for (const Candidate& k : next_) {
       const double q = std::hypot(c.x - k.x, c.y - k.y) / (2 * eqRadius_);
       const double f = q < 1 ? 2 / std::numbers::pi * (std::acos(q) - q * std::sqrt(1 - q * q)) : 0.0;
-      if (f > p_.maxOverlap) overlaps = true;
+      if (f > p_.maxOverlap) return true;
     }
-    if (overlaps) continue;
+    return false;
+  };
+  for (Candidate c : cands_) {
+    if (static_cast<int>(next_.size()) >= taught_.maxParts) break;
+    if (overlapsKept(c)) continue;
+    interpolatePeak(c);
+    if (p_.refine) {
+      smoothGradients(c);
+      refine(c);
+    }
+    if (c.score < minScore || overlapsKept(c)) continue;
     const double angleDeg = normaliseDeg(-c.phi * 180 / std::numbers::pi);
-    const double tol = m_.levels[0].angleStep * 180 / std::numbers::pi;
     if (!fullCircle_ && (angleDeg < taught_.angleMinDeg - tol || angleDeg > taught_.angleMaxDeg + tol)) continue;
-    kept.push_back(c);
+    next_.push_back(c);
     const double cs = std::cos(c.phi), sn = std::sin(c.phi);
     const double gx = taught_.grasp.u - m_.origin.u, gy = taught_.grasp.v - m_.origin.v;
     Detection d;
@@ -570,8 +552,7 @@ Result<LocateOutput> ShapeLocator::locate(const cv::Mat& gray) {
     d.v = roi.y + c.y + sn * gx + cs * gy;
     d.angleDeg = angleDeg;
     d.score = c.score;
-    parts.push_back(d);
-    if (static_cast<int>(parts.size()) >= taught_.maxParts) break;
+    out.parts.push_back(d);
   }
   return out;
 }
