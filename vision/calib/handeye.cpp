@@ -1,0 +1,533 @@
+#include "vision/calib/handeye.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <sstream>
+
+#include <Eigen/Dense>
+#include <fmt/core.h>
+#include <opencv2/calib3d.hpp>
+
+#include "vision/calib/se3.hpp"
+
+namespace vgr::vision::calib {
+namespace {
+
+using se3::Iso;
+constexpr double kDeg = M_PI / 180.0;
+
+cv::Mat toCvR(const Iso& t) {
+  cv::Mat r(3, 3, CV_64F);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) r.at<double>(i, j) = t.linear()(i, j);
+  return r;
+}
+cv::Mat toCvT(const Iso& t) {
+  return (cv::Mat_<double>(3, 1) << t.translation().x(), t.translation().y(), t.translation().z());
+}
+Iso fromCv(const cv::Mat& r, const cv::Mat& t) {
+  Iso out = Iso::Identity();
+  cv::Mat r64, t64;
+  r.convertTo(r64, CV_64F);
+  t.convertTo(t64, CV_64F);
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) out.linear()(i, j) = r64.at<double>(i, j);
+    out.translation()(i) = t64.at<double>(i);
+  }
+  return out;
+}
+
+// The data every method and the refinement work on.
+struct Problem {
+  HandEyeConfig config;
+  std::vector<std::string> names;
+  std::vector<Iso> a;  // T_base_gripper_i
+  std::vector<Iso> b;  // T_cam_target_i (solvePnP)
+  std::vector<std::vector<cv::Point2f>> img;
+  std::vector<cv::Point3f> obj;
+  cv::Matx33d k;
+  cv::Vec<double, 5> d;
+
+  // Y seen through view i for a given X (should be the same for every view).
+  Iso yFromView(const Iso& x, std::size_t i) const {
+    return config == HandEyeConfig::EyeInHand ? Iso(a[i] * x * b[i]) : Iso(a[i].inverse() * x * b[i]);
+  }
+  // T_cam_target_i predicted by the chain A_i, X, Y.
+  Iso camFromTarget(const Iso& x, const Iso& y, std::size_t i) const {
+    return config == HandEyeConfig::EyeInHand ? Iso(x.inverse() * a[i].inverse() * y) : Iso(x.inverse() * a[i] * y);
+  }
+};
+
+void evaluate(const Problem& p, HandEyeMethodResult& m, const Iso& x, const Iso* yGiven) {
+  std::vector<Iso> ys;
+  for (std::size_t i = 0; i < p.a.size(); ++i) ys.push_back(p.yFromView(x, i));
+  const Iso y = yGiven ? *yGiven : se3::meanIso(ys);
+  double st = 0, sr = 0;
+  for (const auto& yi : ys) {
+    st += (yi.translation() - y.translation()).squaredNorm();
+    const double ang = se3::rotationAngleDeg(yi.linear() * y.linear().transpose());
+    sr += ang * ang;
+  }
+  const double n = static_cast<double>(ys.size());
+  m.transResidMm = std::sqrt(st / n);
+  m.rotResidDeg = std::sqrt(sr / n);
+  double se = 0;
+  std::size_t cnt = 0;
+  for (std::size_t i = 0; i < p.a.size(); ++i) {
+    cv::Vec3d rv, tv;
+    se3::toRvecTvec(p.camFromTarget(x, y, i), rv, tv);
+    std::vector<cv::Point2f> proj;
+    cv::projectPoints(p.obj, rv, tv, p.k, p.d, proj);
+    for (std::size_t j = 0; j < proj.size(); ++j) {
+      const cv::Point2f e = proj[j] - p.img[i][j];
+      se += e.x * e.x + e.y * e.y;
+      ++cnt;
+    }
+  }
+  m.reprojRmsPx = std::sqrt(se / std::max<std::size_t>(cnt, 1));
+  m.x = se3::toPose(x);
+  m.y = se3::toPose(y);
+}
+
+// Levenberg-Marquardt on a product of SE(3) factors with left-multiplicative se(3) updates
+// T <- exp(xi) T (paper 003, eqs. 4-8). Hand-written on Eigen: the problem is tiny (6 or 12
+// parameters, ~2000 residuals), needs the manifold update that Eigen's unsupported
+// LevenbergMarquardt (plain R^n) lacks, and Ceres is not one of our dependencies.
+// Jacobians by central differences. Returns the final RMS of the residuals.
+double levenbergMarquardt(std::vector<Iso>& params, const std::function<Eigen::VectorXd(const std::vector<Iso>&)>& f,
+                          int maxIter = 50) {
+  const int np = static_cast<int>(params.size()) * 6;
+  Eigen::VectorXd r = f(params);
+  double cost = r.squaredNorm();
+  double lambda = 1e-3;
+  auto perturbed = [&](const std::vector<Iso>& base, const Eigen::VectorXd& delta) {
+    std::vector<Iso> out = base;
+    for (std::size_t k = 0; k < out.size(); ++k)
+      out[k] = se3::expSe3(delta.segment<6>(static_cast<Eigen::Index>(6 * k))) * out[k];
+    return out;
+  };
+  for (int it = 0; it < maxIter; ++it) {
+    Eigen::MatrixXd jac(r.size(), np);
+    for (int c = 0; c < np; ++c) {
+      // Step: 1e-4 mm in translation, 1e-6 rad in rotation (both well above rounding).
+      const double h = (c % 6) < 3 ? 1e-4 : 1e-6;
+      Eigen::VectorXd dp = Eigen::VectorXd::Zero(np), dm = Eigen::VectorXd::Zero(np);
+      dp(c) = h;
+      dm(c) = -h;
+      jac.col(c) = (f(perturbed(params, dp)) - f(perturbed(params, dm))) / (2 * h);
+    }
+    const Eigen::MatrixXd jtj = jac.transpose() * jac;
+    const Eigen::VectorXd g = jac.transpose() * r;
+    bool improved = false;
+    for (int tries = 0; tries < 10 && !improved; ++tries) {
+      Eigen::MatrixXd aug = jtj;
+      aug.diagonal() += lambda * jtj.diagonal().cwiseMax(1e-9);
+      const Eigen::VectorXd step = -aug.ldlt().solve(g);
+      const std::vector<Iso> cand = perturbed(params, step);
+      const Eigen::VectorXd rc = f(cand);
+      const double cc = rc.squaredNorm();
+      if (std::isfinite(cc) && cc < cost) {
+        const double rel = (cost - cc) / std::max(cost, 1e-30);
+        params = cand;
+        r = rc;
+        cost = cc;
+        lambda = std::max(lambda / 10, 1e-12);
+        improved = true;
+        if (rel < 1e-12) return std::sqrt(cost / static_cast<double>(r.size()));
+      } else {
+        lambda *= 10;
+      }
+    }
+    if (!improved) break;
+  }
+  return std::sqrt(cost / static_cast<double>(r.size()));
+}
+
+std::string joinNames(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
+  return s;
+}
+
+Result<void> checkMotion(const Problem& p, const HandEyeOptions& o, std::vector<std::string>& warnings) {
+  const std::size_t n = p.a.size();
+  double maxAngle = 0;
+  std::vector<Eigen::Vector3d> axes;
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = i + 1; j < n; ++j) {
+      const Iso rel = p.a[i].inverse() * p.a[j];
+      const Eigen::AngleAxisd aa(rel.linear());
+      const double ang = aa.angle() / kDeg;
+      maxAngle = std::max(maxAngle, ang);
+      if (ang > 2.0) axes.push_back(aa.axis());
+      if (rel.translation().norm() < o.duplicateMm && ang < o.duplicateDeg)
+        warnings.push_back(fmt::format("views '{}' and '{}' have the same robot pose ({:.3f} mm, {:.3f} deg apart): "
+                                       "duplicates add no information",
+                                       p.names[i], p.names[j], rel.translation().norm(), ang));
+    }
+  if (maxAngle < o.minRotationDeg)
+    return fail(Status::BadArgument,
+                fmt::format("degenerate motion: the largest rotation between any two of the {} robot poses ({}) is "
+                            "{:.2f} deg, at least {:.0f} deg about two different axes is needed",
+                            n, joinNames(p.names), maxAngle, o.minRotationDeg));
+  double spread = 0;
+  for (std::size_t i = 0; i < axes.size(); ++i)
+    for (std::size_t j = i + 1; j < axes.size(); ++j)
+      spread = std::max(spread, std::acos(std::min(1.0, std::abs(axes[i].dot(axes[j])))) / kDeg);
+  if (spread < o.minAxisSpreadDeg)
+    return fail(Status::BadArgument,
+                fmt::format("degenerate motion: every rotation between the robot poses ({}) is about the same axis "
+                            "(spread {:.2f} deg); rotate about at least two different axes",
+                            joinNames(p.names), spread));
+  if (maxAngle > 120)
+    warnings.push_back(fmt::format("relative rotations up to {:.0f} deg: Tsai is unreliable above ~120 deg "
+                                   "(checked by consistency below)",
+                                   maxAngle));
+  return {};
+}
+
+}  // namespace
+
+const char* handEyeConfigName(HandEyeConfig c) { return c == HandEyeConfig::EyeInHand ? "eye-in-hand" : "eye-to-hand"; }
+
+Result<HandEyeResult> calibrateHandEye(const std::vector<HandEyeView>& views, const CameraIntrinsics& cam,
+                                       const PatternSpec& pattern, HandEyeConfig config,
+                                       const HandEyeOptions& options) {
+  Problem p;
+  p.config = config;
+  p.obj = patternObjectPoints(pattern);
+  p.k = cam.cameraMatrix;
+  p.d = cam.dist;
+  if (static_cast<int>(views.size()) < options.minViews)
+    return fail(Status::BadArgument, fmt::format("too few views for hand-eye: {} given, at least {} needed (15 "
+                                                 "recommended)",
+                                                 views.size(), options.minViews));
+  HandEyeResult res;
+  res.config = config;
+  for (const auto& v : views) {
+    if (v.corners.size() != p.obj.size())
+      return fail(Status::BadArgument, fmt::format("view '{}': {} pattern points, the {}x{} {} has {}", v.name,
+                                                   v.corners.size(), pattern.cols, pattern.rows,
+                                                   patternKindName(pattern.kind), p.obj.size()));
+    cv::Vec3d rv, tv;
+    if (!cv::solvePnP(p.obj, v.corners, p.k, p.d, rv, tv, false, cv::SOLVEPNP_ITERATIVE))
+      return fail(Status::BadArgument, fmt::format("view '{}': solvePnP failed", v.name));
+    p.names.push_back(v.name);
+    p.a.push_back(se3::toIso(v.baseFromGripper));
+    p.b.push_back(se3::fromRvecTvec(rv, tv));
+    p.img.push_back(v.corners);
+  }
+  if (auto ok = checkMotion(p, options, res.warnings); !ok) return std::unexpected(ok.error());
+
+  // OpenCV inputs. calibrateHandEye solves eye-in-hand (gripper2base, target2cam ->
+  // cam2gripper); for eye-to-hand the robot poses are inverted (base2gripper) and the
+  // output is cam2base.
+  std::vector<cv::Mat> rG, tG, rT, tT, rW2C, tW2C, rB2G, tB2G;
+  for (std::size_t i = 0; i < p.a.size(); ++i) {
+    const Iso g = config == HandEyeConfig::EyeInHand ? p.a[i] : p.a[i].inverse();
+    rG.push_back(toCvR(g));
+    tG.push_back(toCvT(g));
+    rT.push_back(toCvR(p.b[i]));
+    tT.push_back(toCvT(p.b[i]));
+    // Robot-world-hand-eye, A X = Z B with A = cTw, B = gTb: eye-in-hand uses the plate as
+    // the world; eye-to-hand swaps roles (the plate plays the camera, the camera the world).
+    const Iso w2c = config == HandEyeConfig::EyeInHand ? p.b[i] : p.b[i].inverse();
+    rW2C.push_back(toCvR(w2c));
+    tW2C.push_back(toCvT(w2c));
+    const Iso b2g = p.a[i].inverse();
+    rB2G.push_back(toCvR(b2g));
+    tB2G.push_back(toCvT(b2g));
+  }
+  const std::pair<const char*, cv::HandEyeCalibrationMethod> heMethods[] = {
+      {"tsai", cv::CALIB_HAND_EYE_TSAI},       {"park", cv::CALIB_HAND_EYE_PARK},
+      {"horaud", cv::CALIB_HAND_EYE_HORAUD},   {"andreff", cv::CALIB_HAND_EYE_ANDREFF},
+      {"daniilidis", cv::CALIB_HAND_EYE_DANIILIDIS}};
+  auto addChecked = [&](const char* name, const std::function<Iso()>& solve) {
+    HandEyeMethodResult m;
+    m.method = name;
+    Iso x;
+    try {
+      x = solve();
+    } catch (const cv::Exception& e) {
+      m.note = fmt::format("OpenCV threw: {}", e.err);
+      res.methods.push_back(m);
+      return;
+    }
+    if (!se3::isValidRigid(x) || x.translation().norm() > 1e5) {
+      m.note = x.matrix().allFinite() ? "not a rigid transform or translation > 100 m" : "NaN in the result";
+      res.methods.push_back(m);
+      return;
+    }
+    evaluate(p, m, x, nullptr);
+    m.valid = m.rotResidDeg <= options.maxRotResidDeg && m.transResidMm <= options.maxTransResidMm;
+    if (!m.valid)
+      m.note = fmt::format("inconsistent: views disagree by {:.2f} mm / {:.3f} deg RMS", m.transResidMm, m.rotResidDeg);
+    res.methods.push_back(m);
+  };
+  for (const auto& [name, method] : heMethods)
+    addChecked(name, [&, method = method]() {
+      cv::Mat r, t;
+      cv::calibrateHandEye(rG, tG, rT, tT, r, t, method);
+      return fromCv(r, t);
+    });
+  const std::pair<const char*, cv::RobotWorldHandEyeCalibrationMethod> rwMethods[] = {
+      {"rwhe-shah", cv::CALIB_ROBOT_WORLD_HAND_EYE_SHAH}, {"rwhe-li", cv::CALIB_ROBOT_WORLD_HAND_EYE_LI}};
+  for (const auto& [name, method] : rwMethods)
+    addChecked(name, [&, method = method]() {
+      cv::Mat rb2w, tb2w, rg2c, tg2c;
+      cv::calibrateRobotWorldHandEye(rW2C, tW2C, rB2G, tB2G, rb2w, tb2w, rg2c, tg2c, method);
+      // eye-in-hand: Z = T_cam_gripper = X^-1; eye-to-hand: X_out = T_cam_base = X^-1.
+      return config == HandEyeConfig::EyeInHand ? Iso(fromCv(rg2c, tg2c).inverse()) : Iso(fromCv(rb2w, tb2w).inverse());
+    });
+
+  int seed = -1;
+  for (std::size_t i = 0; i < res.methods.size(); ++i)
+    if (res.methods[i].valid && (seed < 0 || res.methods[i].reprojRmsPx < res.methods[static_cast<std::size_t>(seed)].reprojRmsPx))
+      seed = static_cast<int>(i);
+  if (seed < 0) {
+    std::string why;
+    for (const auto& m : res.methods) why += fmt::format("; {}: {}", m.method, m.note);
+    return fail(Status::BadArgument, fmt::format("hand-eye ({}): no method gave a consistent result (wrong "
+                                                 "configuration, or robot poses not matching the images?){}",
+                                                 handEyeConfigName(config), why));
+  }
+
+  // Nonlinear refinement of X and Y together: reprojection error of every pattern point
+  // through A_i, X, Y (robot poses taken as exact).
+  {
+    const auto& s = res.methods[static_cast<std::size_t>(seed)];
+    std::vector<Iso> xy = {se3::toIso(s.x), se3::toIso(s.y)};
+    const std::size_t npts = p.obj.size() * p.a.size();
+    auto reproj = [&](const std::vector<Iso>& q) {
+      Eigen::VectorXd r(static_cast<Eigen::Index>(2 * npts));
+      Eigen::Index k = 0;
+      for (std::size_t i = 0; i < p.a.size(); ++i) {
+        cv::Vec3d rv, tv;
+        se3::toRvecTvec(p.camFromTarget(q[0], q[1], i), rv, tv);
+        std::vector<cv::Point2f> proj;
+        cv::projectPoints(p.obj, rv, tv, p.k, p.d, proj);
+        for (std::size_t j = 0; j < proj.size(); ++j) {
+          r(k++) = proj[j].x - p.img[i][j].x;
+          r(k++) = proj[j].y - p.img[i][j].y;
+        }
+      }
+      return r;
+    };
+    levenbergMarquardt(xy, reproj);
+    HandEyeMethodResult m;
+    m.method = "refined";
+    evaluate(p, m, xy[0], &xy[1]);
+    m.valid = se3::isValidRigid(xy[0]) && m.rotResidDeg <= options.maxRotResidDeg &&
+              m.transResidMm <= options.maxTransResidMm;
+    m.note = fmt::format("LM on SE(3) x SE(3) from {}", s.method);
+    res.methods.push_back(m);
+  }
+  // Paper 003 (eqs. 1-3, 9): register every view's corner cloud onto view 1's through X.
+  {
+    const auto& s = res.methods[static_cast<std::size_t>(seed)];
+    std::vector<Iso> xs = {se3::toIso(s.x)};
+    std::vector<std::vector<Eigen::Vector3d>> clouds(p.a.size());
+    for (std::size_t i = 0; i < p.a.size(); ++i)
+      for (const auto& o : p.obj) clouds[i].push_back(p.b[i] * Eigen::Vector3d(o.x, o.y, o.z));
+    auto reg = [&](const std::vector<Iso>& q) {
+      const Iso& x = q[0];
+      Eigen::VectorXd r(static_cast<Eigen::Index>(3 * p.obj.size() * (p.a.size() - 1)));
+      Eigen::Index k = 0;
+      for (std::size_t i = 1; i < p.a.size(); ++i) {
+        // eye-to-hand (paper eq. 2): X^-1 A_1 A_i^-1 X; eye-in-hand: X^-1 A_1^-1 A_i X.
+        const Iso m = p.config == HandEyeConfig::EyeToHand ? Iso(x.inverse() * p.a[0] * p.a[i].inverse() * x)
+                                                           : Iso(x.inverse() * p.a[0].inverse() * p.a[i] * x);
+        for (std::size_t j = 0; j < p.obj.size(); ++j) {
+          r.segment<3>(k) = m * clouds[i][j] - clouds[0][j];
+          k += 3;
+        }
+      }
+      return r;
+    };
+    levenbergMarquardt(xs, reg);
+    HandEyeMethodResult m;
+    m.method = "registration";
+    evaluate(p, m, xs[0], nullptr);
+    m.valid = se3::isValidRigid(xs[0]) && m.rotResidDeg <= options.maxRotResidDeg &&
+              m.transResidMm <= options.maxTransResidMm;
+    m.note = fmt::format("paper 003 point registration in se(3) from {}", s.method);
+    res.methods.push_back(m);
+  }
+
+  for (std::size_t i = 0; i < res.methods.size(); ++i)
+    if (res.methods[i].valid && (res.best < 0 || res.methods[i].reprojRmsPx <
+                                                     res.methods[static_cast<std::size_t>(res.best)].reprojRmsPx))
+      res.best = static_cast<int>(i);
+  const auto& b = res.bestResult();
+  std::string rejected;
+  for (const auto& m : res.methods)
+    if (!m.valid) rejected += fmt::format("{}{} ({})", rejected.empty() ? "" : ", ", m.method, m.note);
+  res.reason = fmt::format("{}: lowest reprojection error {:.3f} px of the consistent methods; views agree on Y "
+                           "within {:.3f} mm / {:.4f} deg RMS{}{}",
+                           b.method, b.reprojRmsPx, b.transResidMm, b.rotResidDeg,
+                           rejected.empty() ? "" : "; rejected: ", rejected);
+  return res;
+}
+
+Result<HandEyeResult> calibrateHandEyeAuto(const std::vector<HandEyeView>& views, const CameraIntrinsics& cam,
+                                           const PatternSpec& pattern, const HandEyeOptions& options) {
+  auto ih = calibrateHandEye(views, cam, pattern, HandEyeConfig::EyeInHand, options);
+  auto th = calibrateHandEye(views, cam, pattern, HandEyeConfig::EyeToHand, options);
+  if (!ih && !th)
+    return fail(Status::BadArgument, fmt::format("neither configuration fits: eye-in-hand: {} | eye-to-hand: {}",
+                                                 ih.error().message, th.error().message));
+  const bool pickIh = ih && (!th || ih->bestResult().reprojRmsPx <= th->bestResult().reprojRmsPx);
+  HandEyeResult r = pickIh ? *ih : *th;
+  const auto& other = pickIh ? th : ih;
+  r.warnings.push_back(other ? fmt::format("configuration chosen by consistency: the other one's best method "
+                                           "reprojects at {:.3f} px vs {:.3f} px",
+                                           other->bestResult().reprojRmsPx, r.bestResult().reprojRmsPx)
+                             : fmt::format("configuration chosen by consistency: the other one failed: {}",
+                                           other.error().message));
+  return r;
+}
+
+Result<void> writeHandEye(const std::string& path, const HandEyeResult& r) {
+  try {
+    cv::FileStorage fs(path, cv::FileStorage::WRITE);
+    if (!fs.isOpened()) return fail(Status::BadArgument, fmt::format("{}: cannot open for writing", path));
+    const auto& b = r.bestResult();
+    auto mat = [](const Pose& p) {
+      const Eigen::Matrix4d m = se3::toIso(p).matrix();
+      cv::Mat out(4, 4, CV_64F);
+      for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) out.at<double>(i, j) = m(i, j);
+      return out;
+    };
+    fs << "calibration_kind" << "handeye";
+    fs << "configuration" << handEyeConfigName(r.config);
+    fs << "x_meaning" << (r.config == HandEyeConfig::EyeInHand ? "T_gripper_cam" : "T_base_cam");
+    fs << "y_meaning" << (r.config == HandEyeConfig::EyeInHand ? "T_base_target" : "T_gripper_target");
+    fs << "x" << mat(b.x) << "y" << mat(b.y);
+    fs << "method" << b.method << "reason" << r.reason;
+    fs << "trans_resid_mm" << b.transResidMm << "rot_resid_deg" << b.rotResidDeg << "reproj_rms_px" << b.reprojRmsPx;
+    fs << "methods" << "[";
+    for (const auto& m : r.methods)
+      fs << "{" << "method" << m.method << "valid" << (m.valid ? 1 : 0) << "trans_resid_mm" << m.transResidMm
+         << "rot_resid_deg" << m.rotResidDeg << "reproj_rms_px" << m.reprojRmsPx << "note" << m.note << "}";
+    fs << "]";
+  } catch (const cv::Exception& e) {
+    return fail(Status::BadArgument, fmt::format("{}: {}", path, e.what()));
+  }
+  return {};
+}
+
+Result<HandEyeFile> readHandEye(const std::string& path) {
+  HandEyeFile f;
+  try {
+    cv::FileStorage fs(path, cv::FileStorage::READ);
+    if (!fs.isOpened()) return fail(Status::NotCalibrated, fmt::format("{}: cannot open hand-eye file", path));
+    const std::string cfg = static_cast<std::string>(fs["configuration"]);
+    if (cfg == "eye-in-hand") f.config = HandEyeConfig::EyeInHand;
+    else if (cfg == "eye-to-hand") f.config = HandEyeConfig::EyeToHand;
+    else return fail(Status::NotCalibrated, fmt::format("{}: key 'configuration': expected eye-in-hand or eye-to-hand, got '{}'", path, cfg));
+    for (const char* key : {"x", "y"}) {
+      cv::Mat m;
+      fs[key] >> m;
+      if (m.rows != 4 || m.cols != 4) return fail(Status::NotCalibrated, fmt::format("{}: key '{}': missing or not 4x4", path, key));
+      m.convertTo(m, CV_64F);
+      Iso t = Iso::Identity();
+      for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) t.linear()(i, j) = m.at<double>(i, j);
+        t.translation()(i) = m.at<double>(i, 3);
+      }
+      if (!se3::isValidRigid(t)) return fail(Status::NotCalibrated, fmt::format("{}: key '{}': not a rigid transform", path, key));
+      (key[0] == 'x' ? f.x : f.y) = se3::toPose(t);
+    }
+    f.method = static_cast<std::string>(fs["method"]);
+    f.transResidMm = static_cast<double>(fs["trans_resid_mm"]);
+    f.rotResidDeg = static_cast<double>(fs["rot_resid_deg"]);
+    f.reprojRmsPx = static_cast<double>(fs["reproj_rms_px"]);
+  } catch (const cv::Exception& e) {
+    return fail(Status::NotCalibrated, fmt::format("{}: {}", path, e.what()));
+  }
+  return f;
+}
+
+Result<std::vector<PoseEntry>> parsePoseFile(const std::string& text, const std::string& src) {
+  enum class Fmt { None, Abb, Fanuc, Ur } format = Fmt::None;
+  double scale = 0;  // mm per unit
+  std::vector<PoseEntry> out;
+  std::istringstream in(text);
+  std::string line;
+  int lineNo = 0;
+  while (std::getline(in, line)) {
+    ++lineNo;
+    if (auto h = line.find('#'); h != std::string::npos) line.resize(h);
+    std::istringstream ls(line);
+    std::string first;
+    if (!(ls >> first)) continue;
+    if (first == "format" || first == "units") {
+      std::string val;
+      ls >> val;
+      if (first == "format") {
+        if (val == "abb") format = Fmt::Abb;
+        else if (val == "fanuc") format = Fmt::Fanuc;
+        else if (val == "ur") format = Fmt::Ur;
+        else return fail(Status::BadArgument, fmt::format("{}:{}: format '{}': expected abb, fanuc or ur", src, lineNo, val));
+      } else {
+        if (val == "mm") scale = 1;
+        else if (val == "m") scale = 1000;
+        else return fail(Status::BadArgument, fmt::format("{}:{}: units '{}': expected mm or m", src, lineNo, val));
+      }
+      continue;
+    }
+    if (format == Fmt::None || scale == 0)
+      return fail(Status::BadArgument, fmt::format("{}:{}: pose before the 'format abb|fanuc|ur' and 'units mm|m' lines", src, lineNo));
+    std::vector<double> v;
+    std::string tok;
+    while (ls >> tok) {
+      try {
+        std::size_t used = 0;
+        v.push_back(std::stod(tok, &used));
+        if (used != tok.size()) throw std::invalid_argument(tok);
+      } catch (const std::exception&) {
+        return fail(Status::BadArgument, fmt::format("{}:{}: '{}' is not a number", src, lineNo, tok));
+      }
+    }
+    const std::size_t want = format == Fmt::Abb ? 7 : 6;
+    if (v.size() != want)
+      return fail(Status::BadArgument, fmt::format("{}:{}: image '{}': {} numbers, expected {} ({})", src, lineNo, first,
+                                                   v.size(), want,
+                                                   format == Fmt::Abb     ? "x y z qw qx qy qz"
+                                                   : format == Fmt::Fanuc ? "x y z w p r"
+                                                                          : "x y z rx ry rz"));
+    Iso t = Iso::Identity();
+    t.translation() = Eigen::Vector3d(v[0], v[1], v[2]) * scale;
+    if (format == Fmt::Abb) {
+      const Eigen::Quaterniond q(v[3], v[4], v[5], v[6]);
+      if (std::abs(q.norm() - 1.0) > 1e-3)
+        return fail(Status::BadArgument, fmt::format("{}:{}: quaternion norm {:.6f}, expected 1", src, lineNo, q.norm()));
+      t.linear() = q.normalized().toRotationMatrix();
+    } else if (format == Fmt::Fanuc) {
+      t.linear() = (Eigen::AngleAxisd(v[5] * kDeg, Eigen::Vector3d::UnitZ()) *
+                    Eigen::AngleAxisd(v[4] * kDeg, Eigen::Vector3d::UnitY()) *
+                    Eigen::AngleAxisd(v[3] * kDeg, Eigen::Vector3d::UnitX()))
+                       .toRotationMatrix();
+    } else {
+      const Eigen::Vector3d rv(v[3], v[4], v[5]);
+      t.linear() = rv.norm() < 1e-15 ? Eigen::Matrix3d::Identity()
+                                     : Eigen::AngleAxisd(rv.norm(), rv.normalized()).toRotationMatrix();
+    }
+    out.push_back({first, se3::toPose(t), lineNo});
+  }
+  if (out.empty()) return fail(Status::BadArgument, fmt::format("{}: no poses", src));
+  return out;
+}
+
+Result<std::vector<PoseEntry>> loadPoseFile(const std::string& path) {
+  std::ifstream f(path);
+  if (!f) return fail(Status::BadArgument, fmt::format("{}: cannot open pose file", path));
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return parsePoseFile(ss.str(), path);
+}
+
+}  // namespace vgr::vision::calib
