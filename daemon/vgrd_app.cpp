@@ -112,8 +112,11 @@ struct VgrdApp::Impl {
   void logStats() {
     // Periodic summary instead of per-frame logging (STYLE.md rule 12).
     const auto c = camera->counters();
-    log::info("main", "camera: {} frames, {} failed ({} timeouts), {} reconnects, {} abandoned; trigger overruns {}",
-              c.completed, c.failed, c.timeouts, c.reconnects, c.abandoned, cycles->overruns());
+    log::info("main",
+              "camera: {} frames, {} failed ({} timeouts, {} incomplete), {} re-triggers ({} recovered), {} reconnects, "
+              "{} abandoned; packets missing {}, resent {}; underruns {}; trigger overruns {}",
+              c.completed, c.failed, c.timeouts, c.incomplete, c.retries, c.recovered, c.reconnects, c.abandoned,
+              c.missingPackets, c.resentPackets, c.underruns, cycles->overruns());
     statsTimer.expires_after(std::chrono::seconds(60));
     statsTimer.async_wait([this](const boost::system::error_code& ec) {
       if (!ec) logStats();

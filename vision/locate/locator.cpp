@@ -7,7 +7,10 @@
 
 #include <opencv2/core.hpp>
 
+#include "vision/locate/contour_weighted_locator.hpp"
 #include "vision/locate/moments_locator.hpp"
+#include "vision/locate/orb_adk_locator.hpp"
+#include "vision/locate/orb_homography_locator.hpp"
 #include "vision/locate/params.hpp"
 #include "vision/locate/shape_matcher.hpp"
 
@@ -138,12 +141,18 @@ Result<std::unique_ptr<Locator>> makeLocator(std::string_view method, const cv::
     return fail(Status::BadArgument, fmt::format("{}: max_parts must be in [1, 64], got {}", method, taught.maxParts));
   // One line per method; keep the order of locatorMethods().
   if (method == "moments") return makeMoments(templateGray, taught);
+  if (method == "orb-ransac") return makeOrbRansacLocator(templateGray, taught);
+  if (method == "orb-prosac") return makeOrbProsacLocator(templateGray, taught);
+  if (method == "orb-adk") return makeOrbAdkLocator(templateGray, taught);
+  if (method == "contour-weighted") return makeContourWeightedLocator(templateGray, taught);
   if (method == "shape") return makeShapeLocator(templateGray, taught);
-  return fail(Status::BadArgument, fmt::format("unknown locate method '{}' (known: moments, shape)", method));
+  std::string known;
+  for (const auto& m : locatorMethods()) known += (known.empty() ? "" : ", ") + m;
+  return fail(Status::BadArgument, fmt::format("unknown locate method '{}' (known: {})", method, known));
 }
 
 const std::vector<std::string>& locatorMethods() {
-  static const std::vector<std::string> kMethods{"moments", "shape"};
+  static const std::vector<std::string> kMethods{"moments", "orb-ransac", "orb-prosac", "orb-adk", "contour-weighted", "shape"};
   return kMethods;
 }
 

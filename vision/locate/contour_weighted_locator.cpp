@@ -1,0 +1,458 @@
+#include "vision/locate/contour_weighted_locator.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fmt/core.h>
+#include <numbers>
+#include <string>
+#include <utility>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/features2d.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "vision/locate/feature_match.hpp"
+#include "vision/locate/params.hpp"
+
+namespace vgr::vision {
+namespace {
+
+using detail::Features;
+
+constexpr double kDegToRad = std::numbers::pi / 180.0;
+
+struct CwParams {
+  // Segmentation (section III.A, Fig. 3).
+  int threshold = 0;            // gray level [0, 255]; 0 = Otsu
+  double minAreaRatio = 0.5;    // [0.05, 1] candidate blob area / the template part's area
+  double maxAreaRatio = 1.6;    // [1, 10]
+  // Initial match (section III.A).
+  detail::OrbParams orb;
+  double gridCellPx = 40;       // [8, 400] cell of the unilateral grid over the template
+  int gridMinSupport = 2;       // [0, 50] neighbours that must move consistently with a match
+  double tauPx = 3;             // [0.5, 20] eq. (2) distance error threshold (paper: 3)
+  int minMatches = 8;           // [3, 1000] matches left for theta_init, d_init
+  // Contour model (section III.B).
+  double edgeLow = 40, edgeHigh = 100;  // Canny thresholds on the template [1, 1000]
+  double minGradient = 20;      // [1, 1000] gradient magnitude that counts as an edge in eq. (5)
+  int maxPoints = 1500;         // [50, 20000] contour points kept (evenly thinned)
+  int autoRegions = 3;          // [1, 16] regions split by position when the job gives none
+  double rDeg = 5;              // [0.1, 45] eq. (6) rotation radius r (paper: 5)
+  double lFraction = 0.2;       // [0.01, 1] eq. (6) translation radius l / circumscribed radius (paper: 0.2)
+};
+
+// One contour point of the template, relative to the grasp point, with its unit gradient
+// and its share of eq. (5)'s weight: w_i / n_i of its region i (the shares sum to 1).
+struct ContourPoint {
+  cv::Point2f p;   // template px minus the grasp point
+  cv::Point2f g;   // unit gradient (T_x, T_y) / |T|
+  float weight;
+};
+
+// Gradient of an image, each vector divided by max(|B|, minGradient): eq. (5) with the
+// magnitudes dividing instead of multiplying, so S is a weighted mean cosine in [-1, 1]
+// (see docs/localization-methods.md) and weak noise gradients count little.
+cv::Mat normalisedGradient(const cv::Mat& gray, double blurSigma, double minGradient) {
+  cv::Mat blurred, gx, gy;
+  cv::GaussianBlur(gray, blurred, cv::Size(), blurSigma);
+  cv::Sobel(blurred, gx, CV_32F, 1, 0, 3);
+  cv::Sobel(blurred, gy, CV_32F, 0, 1, 3);
+  cv::Mat mag;
+  cv::magnitude(gx, gy, mag);
+  cv::max(mag, minGradient, mag);
+  cv::divide(gx, mag, gx);
+  cv::divide(gy, mag, gy);
+  cv::Mat out;
+  cv::merge(std::vector<cv::Mat>{gx, gy}, out);
+  return out;  // CV_32FC2
+}
+
+inline cv::Vec2f sampleNearest(const cv::Mat& g, float x, float y) {
+  const int ix = cvRound(x), iy = cvRound(y);
+  if (ix < 0 || iy < 0 || ix >= g.cols || iy >= g.rows) return {0, 0};
+  return g.at<cv::Vec2f>(iy, ix);
+}
+
+inline cv::Vec2f sampleBilinear(const cv::Mat& g, float x, float y) {
+  const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
+  if (x0 < 0 || y0 < 0 || x0 + 1 >= g.cols || y0 + 1 >= g.rows) return {0, 0};
+  const float fx = x - static_cast<float>(x0), fy = y - static_cast<float>(y0);
+  const cv::Vec2f* r0 = g.ptr<cv::Vec2f>(y0) + x0;
+  const cv::Vec2f* r1 = g.ptr<cv::Vec2f>(y0 + 1) + x0;
+  return (r0[0] * (1 - fx) + r0[1] * fx) * (1 - fy) + (r1[0] * (1 - fx) + r1[1] * fx) * fy;
+}
+
+// Paper 000, eq. (5) at one pose: the template turned counter-clockwise (as displayed) by
+// theta about the grasp point, the grasp point at (u, v) of the gradient image.
+template <bool kBilinear>
+double similarity(const cv::Mat& grad, const std::vector<ContourPoint>& pts, double u, double v, double thetaDeg) {
+  const float c = static_cast<float>(std::cos(thetaDeg * kDegToRad)), s = static_cast<float>(std::sin(thetaDeg * kDegToRad));
+  const float fu = static_cast<float>(u), fv = static_cast<float>(v);
+  double sum = 0, wsum = 0;
+  for (const ContourPoint& k : pts) {
+    // (x, y) -> (x cos + y sin, -x sin + y cos): counter-clockwise as displayed, y down.
+    const float x = fu + k.p.x * c + k.p.y * s, y = fv - k.p.x * s + k.p.y * c;
+    const float tx = k.g.x * c + k.g.y * s, ty = -k.g.x * s + k.g.y * c;
+    const cv::Vec2f b = kBilinear ? sampleBilinear(grad, x, y) : sampleNearest(grad, x, y);
+    sum += k.weight * (tx * b[0] + ty * b[1]);
+    wsum += k.weight;
+  }
+  return wsum > 0 ? sum / wsum : 0;
+}
+
+struct Pose {
+  double u = 0, v = 0, theta = 0, score = -2;
+};
+
+// Exhaustive search of eq. (6) on a grid around `centre`, clipped to the eq. (6) box.
+template <bool kBilinear>
+Pose searchGrid(const cv::Mat& grad, const std::vector<ContourPoint>& pts, const Pose& centre, double angRange,
+                double angStep, double posRange, double posStep, const Pose& init, double r, double l) {
+  Pose best;
+  const int na = static_cast<int>(std::round(angRange / angStep)), np = static_cast<int>(std::round(posRange / posStep));
+  for (int ia = -na; ia <= na; ++ia) {
+    const double th = centre.theta + ia * angStep;
+    if (std::abs(th - init.theta) > r) continue;
+    for (int iy = -np; iy <= np; ++iy) {
+      const double v = centre.v + iy * posStep;
+      if (std::abs(v - init.v) > l) continue;
+      for (int ix = -np; ix <= np; ++ix) {
+        const double u = centre.u + ix * posStep;
+        if (std::abs(u - init.u) > l) continue;
+        const double s = similarity<kBilinear>(grad, pts, u, v, th);
+        if (s > best.score) best = {u, v, th, s};
+      }
+    }
+  }
+  return best;
+}
+
+class ContourWeightedLocator final : public Locator {
+ public:
+  ContourWeightedLocator(const TaughtTemplate& taught, CwParams p, Features tmpl, std::vector<ContourPoint> pts,
+                         double partArea, double circumRadius)
+      : taught_(taught), p_(std::move(p)), tmpl_(std::move(tmpl)), pts_(std::move(pts)), partArea_(partArea),
+        l_(p_.lFraction * circumRadius) {
+    // A thinned copy for the coarse search stage.
+    const size_t stride = std::max<size_t>(1, pts_.size() / 400);
+    for (size_t k = 0; k < pts_.size(); k += stride) coarse_.push_back(pts_[k]);
+  }
+
+  std::string_view method() const override { return "contour-weighted"; }
+
+  Result<LocateOutput> locate(const cv::Mat& gray) override {
+    if (gray.empty() || gray.type() != CV_8UC1)
+      return fail(Status::BadArgument, "contour-weighted: expected a non-empty 8-bit gray image");
+    const cv::Rect roi = detail::searchRect(gray, taught_);
+    LocateOutput out;
+    if (roi.empty()) return out;
+    const cv::Mat img = gray(roi);
+
+    // Binary segmentation into candidates (section III.A, Fig. 3): outer contours of the
+    // foreground whose area is near the template part's.
+    cv::Mat binary;
+    if (p_.threshold > 0)
+      cv::threshold(img, binary, p_.threshold, 255, cv::THRESH_BINARY);
+    else
+      cv::threshold(img, binary, 0, 255, cv::THRESH_BINARY | cv::THRESH_OTSU);
+    std::vector<std::vector<cv::Point>> contours;
+    cv::findContours(binary, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_SIMPLE);
+
+    struct Found {
+      Detection d;
+      std::vector<MatchPair> pairs;
+      int candidates = 0;
+    };
+    std::vector<Found> found;
+    bool gradientsReady = false;
+    for (size_t c = 0; c < contours.size(); ++c) {
+      const double area = cv::contourArea(contours[c]);
+      if (area < p_.minAreaRatio * partArea_ || area > p_.maxAreaRatio * partArea_) continue;
+      if (!gradientsReady) {  // only for images that have a candidate at all
+        coarseGrad_ = normalisedGradient(img, 2.0, p_.minGradient);
+        fineGrad_ = normalisedGradient(img, 1.0, p_.minGradient);
+        gradientsReady = true;
+      }
+      Found f;
+      if (!locateCandidate(img, contours, static_cast<int>(c), f.d, f.pairs, f.candidates)) continue;
+      f.d.u += roi.x;
+      f.d.v += roi.y;
+      for (MatchPair& m : f.pairs) {
+        m.imagePx.u += roi.x;
+        m.imagePx.v += roi.y;
+      }
+      found.push_back(std::move(f));
+    }
+    std::stable_sort(found.begin(), found.end(), [](const Found& a, const Found& b) { return a.d.score > b.d.score; });
+    if (static_cast<int>(found.size()) > taught_.maxParts) found.resize(static_cast<size_t>(taught_.maxParts));
+    for (const Found& f : found) out.parts.push_back(f.d);
+    if (!found.empty()) {
+      out.matches = found.front().pairs;
+      out.candidateMatches = found.front().candidates;
+    }
+    return out;
+  }
+
+ private:
+  // theta_init, d_init from ORB matches in one candidate, then the eq. (5)-(7) refinement.
+  bool locateCandidate(const cv::Mat& img, const std::vector<std::vector<cv::Point>>& contours, int which, Detection& d,
+                       std::vector<MatchPair>& pairs, int& candidates) {
+    const int margin = 12;
+    const cv::Rect box = (cv::boundingRect(contours[static_cast<size_t>(which)]) + cv::Size(2 * margin, 2 * margin) -
+                          cv::Point(margin, margin)) & cv::Rect(0, 0, img.cols, img.rows);
+    cv::Mat mask(box.size(), CV_8U, cv::Scalar(0));
+    cv::drawContours(mask, contours, which, cv::Scalar(255), cv::FILLED, cv::LINE_8, cv::noArray(), 0, -box.tl());
+    cv::dilate(mask, mask, cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * margin - 1, 2 * margin - 1}));
+    const Features cand = detail::detectOrb(img(box), mask, p_.orb.imageFeatures, p_.orb);
+    if (cand.keypoints.size() < static_cast<size_t>(p_.minMatches) || tmpl_.keypoints.size() < 3) return false;
+
+    // Hypothetical matches by brute force (Hamming), template -> candidate.
+    cv::BFMatcher bf(cv::NORM_HAMMING, true);
+    std::vector<cv::DMatch> raw;
+    bf.match(tmpl_.descriptors, cand.descriptors, raw);
+    candidates = static_cast<int>(raw.size());
+
+    // Unilateral grid over the template: a match is kept when at least gridMinSupport of
+    // the matches in its own and the 8 neighbouring cells keep their distance to it (the
+    // local clustering constraint). Hand-written: OpenCV's GMS (xfeatures2d) grids both
+    // images and needs far more matches than a part crop gives.
+    const double cell = p_.gridCellPx;
+    auto cellOf = [cell](cv::Point2f q) { return cv::Point(cvFloor(q.x / cell), cvFloor(q.y / cell)); };
+    std::vector<cv::Point2f> src, dst;
+    for (size_t a = 0; a < raw.size(); ++a) {
+      const cv::Point2f pa = tmpl_.keypoints[static_cast<size_t>(raw[a].queryIdx)].pt;
+      const cv::Point2f qa = cand.keypoints[static_cast<size_t>(raw[a].trainIdx)].pt;
+      const cv::Point ca = cellOf(pa);
+      int support = 0;
+      for (size_t b = 0; b < raw.size() && support < p_.gridMinSupport; ++b) {
+        if (a == b) continue;
+        const cv::Point2f pb = tmpl_.keypoints[static_cast<size_t>(raw[b].queryIdx)].pt;
+        const cv::Point cb = cellOf(pb);
+        if (std::abs(cb.x - ca.x) > 1 || std::abs(cb.y - ca.y) > 1) continue;
+        const cv::Point2f qb = cand.keypoints[static_cast<size_t>(raw[b].trainIdx)].pt;
+        const double dp = cv::norm(pa - pb), dq = cv::norm(qa - qb);
+        if (std::abs(dp - dq) < p_.tauPx + 0.1 * dp) ++support;
+      }
+      if (support < p_.gridMinSupport) continue;
+      src.push_back(pa);
+      dst.push_back(qa);
+    }
+    if (static_cast<int>(src.size()) < p_.minMatches) return false;
+
+    // Local linear (similarity) transformation re-screen with eq. (2): ||q_i - H(p_i)|| < tau.
+    std::vector<unsigned char> inl;
+    cv::Mat A = cv::estimateAffinePartial2D(src, dst, inl, cv::RANSAC, p_.tauPx, 2000, 0.995, 10);
+    if (A.empty()) return false;
+    std::vector<cv::Point2f> s2, d2;
+    for (size_t k = 0; k < src.size(); ++k) {
+      const cv::Point2f h(static_cast<float>(A.at<double>(0, 0) * src[k].x + A.at<double>(0, 1) * src[k].y + A.at<double>(0, 2)),
+                          static_cast<float>(A.at<double>(1, 0) * src[k].x + A.at<double>(1, 1) * src[k].y + A.at<double>(1, 2)));
+      if (cv::norm(dst[k] - h) < p_.tauPx) {  // eq. (2)
+        s2.push_back(src[k]);
+        d2.push_back(dst[k]);
+      }
+    }
+    if (static_cast<int>(s2.size()) < p_.minMatches) return false;
+    // [[a, -b, tx], [b, a, ty]]: the turn counter-clockwise as displayed is -atan2(b, a).
+    const double a = A.at<double>(0, 0), b = A.at<double>(1, 0);
+    const double scale = std::hypot(a, b);
+    if (scale < 0.8 || scale > 1.25) return false;
+    Pose init;
+    init.theta = -std::atan2(b, a) / kDegToRad;
+    init.u = box.x + a * taught_.grasp.u - b * taught_.grasp.v + A.at<double>(0, 2);  // d_init: the grasp point through it
+    init.v = box.y + b * taught_.grasp.u + a * taught_.grasp.v + A.at<double>(1, 2);
+
+    // Eq. (6): S_max over theta_init +- r, d_init +- l, coarse to fine (a full-resolution
+    // exhaustive grid would cost ~1e9 samples per part).
+    const double r = p_.rDeg, l = l_;
+    Pose best = searchGrid<false>(coarseGrad_, coarse_, init, r, 1.0, l, 2.0, init, r, l);
+    best = searchGrid<true>(fineGrad_, pts_, best, 1.5, 0.25, 2.0, 0.5, init, r, l);
+    best = searchGrid<true>(fineGrad_, pts_, best, 0.3, 0.05, 0.5, 0.1, init, r, l);
+    const double score = std::clamp(best.score, 0.0, 1.0);
+    if (!(score > taught_.minScore)) return false;  // eq. (7): S_max > sigma
+    d.u = best.u;
+    d.v = best.v;
+    d.angleDeg = detail::normaliseDeg(best.theta);
+    d.score = score;
+    d.areaPx = cv::contourArea(contours[static_cast<size_t>(which)]);
+    if (d.angleDeg < taught_.angleMinDeg || d.angleDeg > taught_.angleMaxDeg) return false;
+    for (size_t k = 0; k < s2.size(); ++k)
+      pairs.push_back({{s2[k].x, s2[k].y}, {d2[k].x + box.x, d2[k].y + box.y}});
+    return true;
+  }
+
+  TaughtTemplate taught_;
+  CwParams p_;
+  Features tmpl_;
+  std::vector<ContourPoint> pts_, coarse_;
+  double partArea_;
+  double l_;
+  cv::Mat coarseGrad_, fineGrad_;  // scratch, per image
+};
+
+// The template part: the largest outer contour of the segmented template.
+std::vector<cv::Point> templatePart(const cv::Mat& templ, int threshold) {
+  cv::Mat binary;
+  if (threshold > 0)
+    cv::threshold(templ, binary, threshold, 255, cv::THRESH_BINARY);
+  else
+    cv::threshold(templ, binary, 0, 255, cv::THRESH_BINARY | cv::THRESH_OTSU);
+  std::vector<std::vector<cv::Point>> contours;
+  cv::findContours(binary, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
+  std::vector<cv::Point> best;
+  double bestArea = 0;
+  for (auto& c : contours)
+    if (const double a = cv::contourArea(c); a > bestArea) {
+      bestArea = a;
+      best = c;
+    }
+  return best;
+}
+
+}  // namespace
+
+Result<std::unique_ptr<Locator>> makeContourWeightedLocator(const cv::Mat& templateGray, const TaughtTemplate& taught) {
+  const std::string name = "contour-weighted";
+  ParamReader r(name, taught.params);
+  CwParams p;
+  p.orb.imageFeatures = 2000;  // per candidate crop
+  p.threshold = r.integer("threshold", p.threshold, 0, 255);
+  p.minAreaRatio = r.number("min_area_ratio", p.minAreaRatio, 0.05, 1);
+  p.maxAreaRatio = r.number("max_area_ratio", p.maxAreaRatio, 1, 10);
+  detail::readOrbParams(r, p.orb);
+  p.gridCellPx = r.number("grid_cell_px", p.gridCellPx, 8, 400);
+  p.gridMinSupport = r.integer("grid_min_support", p.gridMinSupport, 0, 50);
+  p.tauPx = r.number("tau_px", p.tauPx, 0.5, 20);
+  p.minMatches = r.integer("min_matches", p.minMatches, 3, 1000);
+  p.edgeLow = r.number("edge_low", p.edgeLow, 1, 1000);
+  p.edgeHigh = r.number("edge_high", p.edgeHigh, 1, 1000);
+  p.minGradient = r.number("min_gradient", p.minGradient, 1, 1000);
+  p.maxPoints = r.integer("max_points", p.maxPoints, 50, 20000);
+  p.autoRegions = r.integer("auto_regions", p.autoRegions, 1, 16);
+  p.rDeg = r.number("r_deg", p.rDeg, 0.1, 45);
+  p.lFraction = r.number("l_fraction", p.lFraction, 0.01, 1);
+  if (auto ok = r.finish(); !ok) return std::unexpected(ok.error());
+  if (p.edgeHigh < p.edgeLow) return fail(Status::BadArgument, name + ": parameter 'edge_high' must not be below 'edge_low'");
+
+  const auto outline = templatePart(templateGray, p.threshold);
+  const double partArea = outline.empty() ? 0.0 : cv::contourArea(outline);
+  if (partArea < 100)
+    return fail(Status::BadArgument, name + ": no part found in the template image (segmentation; check 'threshold')");
+  cv::Point2f centre;
+  float circumRadius = 0;
+  cv::minEnclosingCircle(outline, centre, circumRadius);
+
+  // Template ORB features, on the part (its outline grown by 12 px).
+  cv::Mat partMask(templateGray.size(), CV_8U, cv::Scalar(0));
+  cv::drawContours(partMask, std::vector<std::vector<cv::Point>>{outline}, 0, cv::Scalar(255), cv::FILLED);
+  cv::Mat grownMask;
+  cv::dilate(partMask, grownMask, cv::getStructuringElement(cv::MORPH_ELLIPSE, {23, 23}));
+  Features tmpl = detail::detectOrb(templateGray, grownMask, p.orb.templateFeatures, p.orb);
+  if (static_cast<int>(tmpl.keypoints.size()) < p.minMatches)
+    return fail(Status::BadArgument, fmt::format("{}: only {} ORB features in the template ({} needed): too little texture",
+                                                 name, tmpl.keypoints.size(), p.minMatches));
+
+  // The contour: pixels with a significant gradient (Canny edges) on the part, with their
+  // gradients (section III.B, first paragraph).
+  cv::Mat blurred, gx, gy, edges;
+  cv::GaussianBlur(templateGray, blurred, cv::Size(), 1.0);
+  cv::Sobel(blurred, gx, CV_32F, 1, 0, 3);
+  cv::Sobel(blurred, gy, CV_32F, 0, 1, 3);
+  cv::Canny(blurred, edges, p.edgeLow, p.edgeHigh, 3, true);
+  edges &= grownMask;
+  std::vector<cv::Point> edgePts;
+  cv::findNonZero(edges, edgePts);
+  std::vector<cv::Point> kept;
+  for (const cv::Point& e : edgePts)
+    if (std::hypot(gx.at<float>(e), gy.at<float>(e)) >= p.minGradient) kept.push_back(e);
+  const size_t stride = std::max<size_t>(1, (kept.size() + static_cast<size_t>(p.maxPoints) - 1) / static_cast<size_t>(p.maxPoints));
+  std::vector<cv::Point> pts;
+  for (size_t k = 0; k < kept.size(); k += stride) pts.push_back(kept[k]);
+  if (pts.size() < 20)
+    return fail(Status::BadArgument, fmt::format("{}: only {} contour points in the template (check 'edge_low'/'edge_high')",
+                                                 name, pts.size()));
+
+  // Regions (Fig. 5): the job's polygons with their height factors epsilon, or, when the job
+  // gives none, a split by position (k-means of the contour points, epsilon = 1).
+  std::vector<int> region(pts.size(), -1);
+  std::vector<double> epsilon;
+  if (!taught.regions.empty()) {
+    for (size_t j = 0; j < taught.regions.size(); ++j) {
+      const auto& reg = taught.regions[j];
+      if (reg.polygon.size() < 3)
+        return fail(Status::BadArgument, fmt::format("{}: region {} has fewer than 3 polygon points", name, j + 1));
+      if (!(reg.heightFactor >= 0 && reg.heightFactor <= 1))
+        return fail(Status::BadArgument, fmt::format("{}: region {} height factor {} is not in [0, 1]", name, j + 1, reg.heightFactor));
+      epsilon.push_back(reg.heightFactor);
+    }
+    for (size_t k = 0; k < pts.size(); ++k)
+      for (size_t j = 0; j < taught.regions.size() && region[k] < 0; ++j) {
+        std::vector<cv::Point2f> poly;
+        for (const auto& q : taught.regions[j].polygon) poly.emplace_back(static_cast<float>(q.u), static_cast<float>(q.v));
+        if (cv::pointPolygonTest(poly, cv::Point2f(pts[k]), false) >= 0) region[k] = static_cast<int>(j);
+      }
+  } else {
+    const int K = std::min<int>(p.autoRegions, static_cast<int>(pts.size()));
+    cv::Mat data(static_cast<int>(pts.size()), 2, CV_32F);
+    for (size_t k = 0; k < pts.size(); ++k) {
+      data.at<float>(static_cast<int>(k), 0) = static_cast<float>(pts[k].x);
+      data.at<float>(static_cast<int>(k), 1) = static_cast<float>(pts[k].y);
+    }
+    cv::Mat labels;
+    if (K > 1) {
+      cv::RNG& rng = cv::theRNG();
+      const cv::RNG saved = rng;
+      rng = cv::RNG(0x5eed);  // the same regions every time the job loads
+      cv::kmeans(data, K, labels, cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 50, 0.1), 3,
+                 cv::KMEANS_PP_CENTERS);
+      rng = saved;
+    } else {
+      labels = cv::Mat::zeros(data.rows, 1, CV_32S);
+    }
+    for (size_t k = 0; k < pts.size(); ++k) region[k] = labels.at<int>(static_cast<int>(k));
+    epsilon.assign(static_cast<size_t>(K), 1.0);
+  }
+
+  // Eq. (4): d_i, the mean distance of region i's contour points to the grasp point.
+  const size_t m = epsilon.size();
+  std::vector<double> dsum(m, 0), n(m, 0);
+  for (size_t k = 0; k < pts.size(); ++k)
+    if (region[k] >= 0) {
+      dsum[static_cast<size_t>(region[k])] += std::hypot(pts[k].x - taught.grasp.u, pts[k].y - taught.grasp.v);
+      ++n[static_cast<size_t>(region[k])];
+    }
+  std::vector<double> di(m, 0);
+  double sumD = 0;
+  size_t used = 0;
+  for (size_t j = 0; j < m; ++j)
+    if (n[j] > 0) {
+      di[j] = dsum[j] / n[j];
+      sumD += di[j];
+      ++used;
+    }
+  // Eq. (3): w_j = (sum_i d_i - d_j) eps_j / sum_j ((sum_i d_i - d_j) eps_j); one region: w = 1.
+  std::vector<double> w(m, 0);
+  double wsum = 0;
+  for (size_t j = 0; j < m; ++j)
+    if (n[j] > 0) {
+      w[j] = (used == 1 ? 1.0 : sumD - di[j]) * epsilon[j];
+      wsum += w[j];
+    }
+  if (!(wsum > 0)) return fail(Status::BadArgument, name + ": every contour region has weight 0 (height factors, or no contour inside the regions)");
+  std::vector<ContourPoint> model;
+  for (size_t k = 0; k < pts.size(); ++k) {
+    if (region[k] < 0) continue;
+    const size_t j = static_cast<size_t>(region[k]);
+    if (w[j] <= 0) continue;
+    const float tx = gx.at<float>(pts[k]), ty = gy.at<float>(pts[k]);
+    const float mag = std::hypot(tx, ty);
+    model.push_back({cv::Point2f(static_cast<float>(pts[k].x - taught.grasp.u), static_cast<float>(pts[k].y - taught.grasp.v)),
+                     cv::Point2f(tx / mag, ty / mag), static_cast<float>(w[j] / wsum / n[j])});
+  }
+  if (model.size() < 20) return fail(Status::BadArgument, name + ": fewer than 20 weighted contour points in the template");
+  return std::make_unique<ContourWeightedLocator>(taught, std::move(p), std::move(tmpl), std::move(model), partArea,
+                                                  static_cast<double>(circumRadius));
+}
+
+}  // namespace vgr::vision
