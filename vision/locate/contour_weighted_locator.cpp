@@ -309,9 +309,18 @@ class ContourWeightedLocator final : public Locator {
     Pose init;
     init.theta = thetaInit;
     init.d.assign(groups_.size(), dInit);
-    Pose best = searchGrid<false>(coarseGrad_, coarse_, coarseWeight_, init, r, 1.0, l, 2.0, thetaInit, dInit, r, l);
-    best = searchGrid<true>(fineGrad_, groups_, weight_, best, 1.5, 0.25, 2.0, 0.5, thetaInit, dInit, r, l);
-    best = searchGrid<true>(fineGrad_, groups_, weight_, best, 0.3, 0.05, 0.5, 0.1, thetaInit, dInit, r, l);
+    double thetaCentre = thetaInit;
+    Pose best = searchGrid<false>(coarseGrad_, coarse_, coarseWeight_, init, r, 1.0, l, 2.0, thetaCentre, dInit, r, l);
+    // theta_init comes from a similarity over a few matches; when they sit on one small
+    // feature (a boss) it can be off by more than r. A maximum on the edge of the angle
+    // range is then not S_max: the range moves there, at most twice.
+    for (int moves = 0; moves < 2 && std::abs(best.theta - thetaCentre) > r - 1.0; ++moves) {
+      thetaCentre = best.theta;
+      init.theta = thetaCentre;
+      best = searchGrid<false>(coarseGrad_, coarse_, coarseWeight_, init, r, 1.0, l, 2.0, thetaCentre, dInit, r, l);
+    }
+    best = searchGrid<true>(fineGrad_, groups_, weight_, best, 1.5, 0.25, 2.0, 0.5, thetaCentre, dInit, r, l);
+    best = searchGrid<true>(fineGrad_, groups_, weight_, best, 0.3, 0.05, 0.5, 0.1, thetaCentre, dInit, r, l);
     const double score = std::clamp(best.score, 0.0, 1.0);
     if (!(score > taught_.minScore)) return false;  // eq. (7): S_max > sigma
     d.u = best.d[graspGroup_].x;
