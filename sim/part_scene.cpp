@@ -7,17 +7,12 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "core/angles.hpp"
+
 namespace vgr::sim {
 namespace {
 
 constexpr double kDegToRad = M_PI / 180.0;
-
-double normaliseDeg(double a) {
-  a = std::fmod(a, 360.0);
-  if (a <= -180.0) a += 360.0;
-  if (a > 180.0) a -= 360.0;
-  return a;
-}
 
 Polygon rect(double x0, double y0, double x1, double y1) { return {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}}; }
 

@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "config/cell_config.hpp"
+#include "core/angles.hpp"
 
 namespace vgr::sim {
 namespace {
@@ -32,13 +33,6 @@ std::vector<PointMm> makeOutline() {
   cy /= 6 * a;
   for (auto& q : p) q.x -= cx, q.y -= cy;
   return p;
-}
-
-double normaliseDeg(double a) {
-  a = std::fmod(a, 360.0);
-  if (a <= -180.0) a += 360.0;
-  if (a > 180.0) a -= 360.0;
-  return a;
 }
 
 }  // namespace

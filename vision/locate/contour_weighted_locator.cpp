@@ -12,6 +12,7 @@
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "core/angles.hpp"
 #include "vision/locate/feature_match.hpp"
 #include "vision/locate/params.hpp"
 
@@ -325,7 +326,7 @@ class ContourWeightedLocator final : public Locator {
     if (!(score > taught_.minScore)) return false;  // eq. (7): S_max > sigma
     d.u = best.d[graspGroup_].x;
     d.v = best.d[graspGroup_].y;
-    d.angleDeg = detail::normaliseDeg(best.theta);
+    d.angleDeg = normaliseDeg(best.theta);
     d.score = score;
     d.areaPx = cv::contourArea(contours[static_cast<size_t>(which)]);
     if (d.angleDeg < taught_.angleMinDeg || d.angleDeg > taught_.angleMaxDeg) return false;

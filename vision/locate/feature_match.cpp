@@ -9,14 +9,9 @@
 #include <opencv2/flann.hpp>
 #include <opencv2/imgproc.hpp>
 
-namespace vgr::vision::detail {
+#include "core/angles.hpp"
 
-double normaliseDeg(double a) {
-  a = std::fmod(a, 360.0);
-  if (a <= -180.0) a += 360.0;
-  if (a > 180.0) a -= 360.0;
-  return a;
-}
+namespace vgr::vision::detail {
 
 cv::Rect searchRect(const cv::Mat& gray, const TaughtTemplate& taught) {
   cv::Rect roi(0, 0, gray.cols, gray.rows);

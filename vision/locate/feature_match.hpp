@@ -21,9 +21,6 @@ namespace vgr::vision::detail {
 
 struct FeatureSearch;
 
-// Angle in degrees mapped to (-180, 180].
-double normaliseDeg(double a);
-
 // The part of the image a job searches: TaughtTemplate::searchRoi clipped to the image, or
 // the whole image when the ROI is empty.
 cv::Rect searchRect(const cv::Mat& gray, const TaughtTemplate& taught);

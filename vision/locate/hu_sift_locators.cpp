@@ -11,19 +11,13 @@
 #include <opencv2/flann.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "core/angles.hpp"
 #include "vision/locate/params.hpp"
 
 namespace vgr::vision {
 namespace {
 
 constexpr double kRadToDeg = 180.0 / std::numbers::pi;
-
-double normaliseDeg(double a) {
-  a = std::fmod(a, 360.0);
-  if (a <= -180.0) a += 360.0;
-  if (a > 180.0) a -= 360.0;
-  return a;
-}
 
 cv::Rect searchRect(const TaughtTemplate& t, const cv::Mat& gray) {
   cv::Rect roi(0, 0, gray.cols, gray.rows);

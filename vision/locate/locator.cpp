@@ -7,6 +7,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "core/angles.hpp"
 #include "vision/locate/contour_weighted_locator.hpp"
 #include "vision/locate/hu_sift_locators.hpp"
 #include "vision/locate/moments_locator.hpp"
@@ -69,13 +70,6 @@ Result<void> ParamReader::finish() const {
 }
 
 namespace {
-
-double normaliseDeg(double a) {
-  a = std::fmod(a, 360.0);
-  if (a <= -180.0) a += 360.0;
-  if (a > 180.0) a -= 360.0;
-  return a;
-}
 
 // "moments" with a template: the template's own blob gives the reference centroid and axis;
 // a live blob's rotation is its axis minus the template's, and the grasp point is the
