@@ -3,6 +3,7 @@
 //   vgr check --config FILE   validate a cell config
 //   vgr cameras [--json]      list the GigE Vision cameras on the network (docs/cameras.md)
 //   vgr grab --camera ID ...  trigger N frames, report errors and latency (docs/cameras.md)
+//   vgr calibrate intrinsics|handeye|synth ...   calibration (docs/calibration.md)
 //   vgr sim render | teach | locate | eval   localization datasets, jobs, runs (docs/localization.md)
 #include <cstdio>
 #include <string>
@@ -10,6 +11,7 @@
 #include <CLI/CLI.hpp>
 
 #include "config/cell_config.hpp"
+#include "daemon/calibrate.hpp"
 #include "daemon/demo.hpp"
 #include "daemon/grab.hpp"
 #include "daemon/locate_cli.hpp"
@@ -50,9 +52,51 @@ int main(int argc, char** argv) {
   grabCmd->add_option("--interval-ms", grab.intervalMs, "pause between triggers")->check(CLI::Range(0, 60000));
   grabCmd->add_flag("--json", grab.json, "JSON output; the last line is {\"frames\",\"ok\",\"errors\",\"p50_ms\",\"p99_ms\"}");
 
+  // vgr calibrate ... (docs/calibration.md)
+  auto* calCmd = app.add_subcommand("calibrate", "camera intrinsics, hand-eye, synthetic calibration data");
+  calCmd->require_subcommand(1);
+  auto addPattern = [](CLI::App* c, vgr::daemon::CalibPatternOptions& p) {
+    c->add_option("--pattern", p.pattern, "chessboard or circles (symmetric grid)");
+    c->add_option("--cols", p.cols, "inner corners (chessboard) / circles per row");
+    c->add_option("--rows", p.rows, "inner corners (chessboard) / circles per column");
+    c->add_option("--square", p.squareMm, "square size / circle spacing, mm");
+  };
+  vgr::daemon::CalibIntrinsicsOptions calIntr;
+  auto* calIntrCmd = calCmd->add_subcommand("intrinsics", "camera matrix and distortion from plate images");
+  calIntrCmd->add_option("--images", calIntr.images, "glob of the plate images, e.g. 'calib/*.png'")->required();
+  addPattern(calIntrCmd, calIntr.pattern);
+  calIntrCmd->add_option("--out", calIntr.out, "OpenCV FileStorage YAML to write");
+  calIntrCmd->add_flag("--json", calIntr.json, "end with one JSON line (rms_px, fx, fy, cx, cy, views_used, ...)");
+  vgr::daemon::CalibHandEyeOptions calHe;
+  auto* calHeCmd = calCmd->add_subcommand("handeye", "hand-eye from a folder of plate images + poses.txt");
+  calHeCmd->add_option("--folder", calHe.folder, "folder with poses.txt and the images it names")->required();
+  calHeCmd->add_option("--intrinsics", calHe.intrinsics, "intrinsics.yaml from 'vgr calibrate intrinsics'")->required();
+  calHeCmd->add_option("--configuration", calHe.configuration, "eye-in-hand, eye-to-hand or auto");
+  addPattern(calHeCmd, calHe.pattern);
+  calHeCmd->add_option("--out", calHe.out, "handeye.yaml to write");
+  calHeCmd->add_option("--truth", calHe.truth, "truth.yaml of a synthetic set: print each method's error");
+  calHeCmd->add_flag("--json", calHe.json, "end with one JSON line");
+  vgr::daemon::CalibSynthOptions calSyn;
+  auto* calSynCmd = calCmd->add_subcommand("synth", "render a synthetic calibration set with ground truth");
+  calSynCmd->add_option("--kind", calSyn.kind, "intrinsics or handeye");
+  calSynCmd->add_option("--out", calSyn.out, "folder to write")->required();
+  calSynCmd->add_option("--configuration", calSyn.configuration, "eye-in-hand or eye-to-hand (handeye)");
+  calSynCmd->add_option("--pose-format", calSyn.poseFormat, "abb, fanuc or ur (handeye)");
+  addPattern(calSynCmd, calSyn.pattern);
+  calSynCmd->add_option("--views", calSyn.views, "number of views")->check(CLI::Range(1, 1000));
+  calSynCmd->add_option("--seed", calSyn.seed, "random seed");
+  calSynCmd->add_option("--robot-noise-mm", calSyn.robotNoiseMm, "robot position noise, mm per axis");
+  calSynCmd->add_option("--robot-noise-deg", calSyn.robotNoiseDeg, "robot rotation noise, deg per axis");
+  calSynCmd->add_option("--max-tilt", calSyn.maxTiltDeg, "largest plate tilt, deg");
+  calSynCmd->add_option("--distance", calSyn.distanceMm, "camera-plate distance, mm");
+
   vgr::daemon::LocateCommands locateCmds(app);  // sim render, teach, locate, eval
   CLI11_PARSE(app, argc, argv);
   if (const int rc = locateCmds.run(); rc >= 0) return rc;
+
+  if (*calIntrCmd) return vgr::daemon::runCalibrateIntrinsics(calIntr);
+  if (*calHeCmd) return vgr::daemon::runCalibrateHandEye(calHe);
+  if (*calSynCmd) return vgr::daemon::runCalibrateSynth(calSyn);
 
   if (*camerasCmd) return vgr::daemon::runCameras(camerasJson);
   if (*grabCmd) return vgr::daemon::runGrab(grab);

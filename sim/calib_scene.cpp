@@ -50,18 +50,33 @@ cv::Mat renderPlate(const TrueCamera& cam, const PatternSpec& spec, const Pose& 
   // Plate coordinates of every pixel corner (u - 0.5, v - 0.5): undistort to a normalised
   // ray, intersect with the plate plane. Sub-samples interpolate bilinearly between the four
   // corners of their pixel (the map is smooth at that scale).
-  std::vector<cv::Point2d> grid;
-  grid.reserve(static_cast<std::size_t>((w + 1) * (h + 1)));
-  for (int v = 0; v <= h; ++v)
-    for (int u = 0; u <= w; ++u) grid.emplace_back(u - 0.5, v - 0.5);
-  std::vector<cv::Point2d> norm;
-  cv::undistortPoints(grid, norm, cam.cameraMatrix, cam.dist, cv::noArray(), cv::noArray(),
+  // Undistortion runs on a 4 px lattice and is interpolated bilinearly to the pixel corners:
+  // the map is smooth (interpolation error ~ h^2/8 * |d2/du2| < 1e-3 px for this lens) and
+  // undistortPoints costs ~0.4 us per point.
+  constexpr int kStep = 4;
+  const int gw = w / kStep + 2, gh = h / kStep + 2;
+  std::vector<cv::Point2d> lattice;
+  lattice.reserve(static_cast<std::size_t>(gw * gh));
+  for (int j = 0; j < gh; ++j)
+    for (int i = 0; i < gw; ++i) lattice.emplace_back(i * kStep - 0.5, j * kStep - 0.5);
+  std::vector<cv::Point2d> latticeNorm;
+  cv::undistortPoints(lattice, latticeNorm, cam.cameraMatrix, cam.dist, cv::noArray(), cv::noArray(),
                       cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 50, 1e-12));
+  std::vector<cv::Point2d> norm;
+  norm.reserve(static_cast<std::size_t>((w + 1) * (h + 1)));
+  for (int v = 0; v <= h; ++v)
+    for (int u = 0; u <= w; ++u) {
+      const int i = u / kStep, j = v / kStep;
+      const double fu = static_cast<double>(u - i * kStep) / kStep, fv = static_cast<double>(v - j * kStep) / kStep;
+      const auto at = [&](int a, int b) { return latticeNorm[static_cast<std::size_t>(b * gw + a)]; };
+      norm.push_back((1 - fu) * (1 - fv) * at(i, j) + fu * (1 - fv) * at(i + 1, j) + (1 - fu) * fv * at(i, j + 1) +
+                     fu * fv * at(i + 1, j + 1));
+    }
   const se3::Iso t = se3::toIso(camFromPlate);
   const Eigen::Vector3d n = t.linear().col(2), o3 = t.translation();
   const Eigen::Matrix3d rt = t.linear().transpose();
-  std::vector<cv::Point2d> plate(grid.size());
-  std::vector<char> valid(grid.size(), 0);
+  std::vector<cv::Point2d> plate(norm.size());  // one entry per pixel corner, (w + 1) x (h + 1)
+  std::vector<char> valid(norm.size(), 0);
   for (std::size_t k = 0; k < norm.size(); ++k) {
     const Eigen::Vector3d d(norm[k].x, norm[k].y, 1.0);
     const double den = n.dot(d);

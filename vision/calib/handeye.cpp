@@ -145,6 +145,87 @@ double levenbergMarquardt(std::vector<Iso>& params, const std::function<Eigen::V
   return std::sqrt(cost / static_cast<double>(r.size()));
 }
 
+// Joint maximum-likelihood refinement of X, Y and a small correction C_i per robot pose
+// (A_i' = C_i A_i, C_i = exp(xi_i), paper 003 eqs. 4-8 for the parametrisation). Residuals:
+// reprojection / sigmaPx for every pattern point, and xi_i / (sigmaMm, sigmaRad) as the prior
+// that the controller's pose is right within its repeatability. Same hand-written LM as
+// above, with the Jacobian's block structure used: C_i only moves view i's residuals.
+void refineJoint(const Problem& p, Iso& x, Iso& y, double sigmaPx, double sigmaMm, double sigmaRad) {
+  const std::size_t n = p.a.size(), m = p.obj.size();
+  const Eigen::Index rowsPerView = static_cast<Eigen::Index>(2 * m + 6);
+  const Eigen::Index nr = rowsPerView * static_cast<Eigen::Index>(n), np = 12 + 6 * static_cast<Eigen::Index>(n);
+  std::vector<Iso> c(n, Iso::Identity());
+  auto viewRes = [&](const Iso& xx, const Iso& yy, const Iso& ci, std::size_t i) {
+    Eigen::VectorXd r(rowsPerView);
+    const Iso a = ci * p.a[i];
+    const Iso ct = p.config == HandEyeConfig::EyeInHand ? Iso(xx.inverse() * a.inverse() * yy) : Iso(xx.inverse() * a * yy);
+    cv::Vec3d rv, tv;
+    se3::toRvecTvec(ct, rv, tv);
+    std::vector<cv::Point2f> proj;
+    cv::projectPoints(p.obj, rv, tv, p.k, p.d, proj);
+    for (std::size_t j = 0; j < m; ++j) {
+      r(static_cast<Eigen::Index>(2 * j)) = (proj[j].x - p.img[i][j].x) / sigmaPx;
+      r(static_cast<Eigen::Index>(2 * j + 1)) = (proj[j].y - p.img[i][j].y) / sigmaPx;
+    }
+    const se3::Vec6 xi = se3::logSe3(ci);
+    r.segment<3>(static_cast<Eigen::Index>(2 * m)) = xi.head<3>() / sigmaMm;
+    r.segment<3>(static_cast<Eigen::Index>(2 * m + 3)) = xi.tail<3>() / sigmaRad;
+    return r;
+  };
+  auto allRes = [&](const Iso& xx, const Iso& yy, const std::vector<Iso>& cc) {
+    Eigen::VectorXd r(nr);
+    for (std::size_t i = 0; i < n; ++i) r.segment(rowsPerView * static_cast<Eigen::Index>(i), rowsPerView) = viewRes(xx, yy, cc[i], i);
+    return r;
+  };
+  auto step = [](const Iso& t, const se3::Vec6& d) { return Iso(se3::expSe3(d) * t); };
+  Eigen::VectorXd r = allRes(x, y, c);
+  double cost = r.squaredNorm(), lambda = 1e-3;
+  for (int it = 0; it < 30; ++it) {
+    Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(nr, np);
+    for (int col = 0; col < 12; ++col) {
+      const double h = (col % 6) < 3 ? 1e-4 : 1e-6;
+      se3::Vec6 d = se3::Vec6::Zero();
+      d(col % 6) = h;
+      const bool isX = col < 6;
+      const Eigen::VectorXd rp = allRes(isX ? step(x, d) : x, isX ? y : step(y, d), c);
+      const Eigen::VectorXd rm = allRes(isX ? step(x, -d) : x, isX ? y : step(y, -d), c);
+      jac.col(col) = (rp - rm) / (2 * h);
+    }
+    for (std::size_t i = 0; i < n; ++i)
+      for (int k = 0; k < 6; ++k) {
+        const double h = k < 3 ? 1e-4 : 1e-6;
+        se3::Vec6 d = se3::Vec6::Zero();
+        d(k) = h;
+        const Eigen::VectorXd rp = viewRes(x, y, step(c[i], d), i), rm = viewRes(x, y, step(c[i], -d), i);
+        jac.block(rowsPerView * static_cast<Eigen::Index>(i), 12 + 6 * static_cast<Eigen::Index>(i) + k, rowsPerView, 1) =
+            (rp - rm) / (2 * h);
+      }
+    const Eigen::MatrixXd jtj = jac.transpose() * jac;
+    const Eigen::VectorXd g = jac.transpose() * r;
+    bool improved = false;
+    for (int tries = 0; tries < 10 && !improved; ++tries) {
+      Eigen::MatrixXd aug = jtj;
+      aug.diagonal() += lambda * jtj.diagonal().cwiseMax(1e-9);
+      const Eigen::VectorXd dlt = -aug.ldlt().solve(g);
+      const Iso xc = step(x, dlt.segment<6>(0)), yc = step(y, dlt.segment<6>(6));
+      std::vector<Iso> cc(n);
+      for (std::size_t i = 0; i < n; ++i) cc[i] = step(c[i], dlt.segment<6>(12 + 6 * static_cast<Eigen::Index>(i)));
+      const Eigen::VectorXd rc = allRes(xc, yc, cc);
+      const double costC = rc.squaredNorm();
+      if (std::isfinite(costC) && costC < cost) {
+        const double rel = (cost - costC) / std::max(cost, 1e-30);
+        x = xc, y = yc, c = cc, r = rc, cost = costC;
+        lambda = std::max(lambda / 10, 1e-12);
+        improved = true;
+        if (rel < 1e-10) return;
+      } else {
+        lambda *= 10;
+      }
+    }
+    if (!improved) return;
+  }
+}
+
 std::string joinNames(const std::vector<std::string>& v) {
   std::string s;
   for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
@@ -317,12 +398,27 @@ Result<HandEyeResult> calibrateHandEye(const std::vector<HandEyeView>& views, co
     };
     levenbergMarquardt(xy, reproj);
     HandEyeMethodResult m;
-    m.method = "refined";
+    m.method = "refined-reproj";
     evaluate(p, m, xy[0], &xy[1]);
     m.valid = se3::isValidRigid(xy[0]) && m.rotResidDeg <= options.maxRotResidDeg &&
               m.transResidMm <= options.maxTransResidMm;
-    m.note = fmt::format("LM on SE(3) x SE(3) from {}", s.method);
+    m.note = fmt::format("LM on SE(3) x SE(3) from {}, robot poses exact", s.method);
     res.methods.push_back(m);
+    // Joint refinement: the robot poses are measurements too (maximum likelihood under the
+    // stated noise). Pixel sigma: options.cornerSigmaPx, else estimated from the fit above.
+    const double sigmaPx = options.cornerSigmaPx > 0 ? options.cornerSigmaPx
+                                                     : std::max(m.reprojRmsPx / std::sqrt(2.0), 0.01);
+    Iso xj = xy[0], yj = xy[1];
+    refineJoint(p, xj, yj, sigmaPx, options.robotSigmaMm, options.robotSigmaDeg * kDeg);
+    HandEyeMethodResult mj;
+    mj.method = "refined";
+    evaluate(p, mj, xj, &yj);
+    mj.valid = se3::isValidRigid(xj) && mj.rotResidDeg <= options.maxRotResidDeg &&
+               mj.transResidMm <= options.maxTransResidMm;
+    mj.note = fmt::format("LM over X, Y and a correction per robot pose (robot sigma {} mm / {} deg, corner sigma "
+                          "{:.3f} px), from {}",
+                          options.robotSigmaMm, options.robotSigmaDeg, sigmaPx, s.method);
+    res.methods.push_back(mj);
   }
   // Paper 003 (eqs. 1-3, 9): register every view's corner cloud onto view 1's through X.
   {
@@ -356,17 +452,28 @@ Result<HandEyeResult> calibrateHandEye(const std::vector<HandEyeView>& views, co
     res.methods.push_back(m);
   }
 
+  // The joint refinement is the maximum-likelihood estimate under the noise model, so it is
+  // chosen when it is consistent; otherwise the consistent method with the lowest
+  // reprojection error.
+  std::string why;
   for (std::size_t i = 0; i < res.methods.size(); ++i)
-    if (res.methods[i].valid && (res.best < 0 || res.methods[i].reprojRmsPx <
-                                                     res.methods[static_cast<std::size_t>(res.best)].reprojRmsPx))
-      res.best = static_cast<int>(i);
+    if (res.methods[i].valid && res.methods[i].method == "refined") res.best = static_cast<int>(i);
+  if (res.best >= 0) {
+    why = "maximum likelihood over X, Y and the robot poses (a closed-form method's X reprojects at " +
+          fmt::format("{:.3f} px", res.methods[static_cast<std::size_t>(seed)].reprojRmsPx) + ")";
+  } else {
+    for (std::size_t i = 0; i < res.methods.size(); ++i)
+      if (res.methods[i].valid && (res.best < 0 || res.methods[i].reprojRmsPx <
+                                                       res.methods[static_cast<std::size_t>(res.best)].reprojRmsPx))
+        res.best = static_cast<int>(i);
+    why = "lowest reprojection error of the consistent methods (the joint refinement was not consistent)";
+  }
   const auto& b = res.bestResult();
   std::string rejected;
   for (const auto& m : res.methods)
     if (!m.valid) rejected += fmt::format("{}{} ({})", rejected.empty() ? "" : ", ", m.method, m.note);
-  res.reason = fmt::format("{}: lowest reprojection error {:.3f} px of the consistent methods; views agree on Y "
-                           "within {:.3f} mm / {:.4f} deg RMS{}{}",
-                           b.method, b.reprojRmsPx, b.transResidMm, b.rotResidDeg,
+  res.reason = fmt::format("{}: {}; reprojection {:.3f} px, views agree on Y within {:.3f} mm / {:.4f} deg RMS{}{}",
+                           b.method, why, b.reprojRmsPx, b.transResidMm, b.rotResidDeg,
                            rejected.empty() ? "" : "; rejected: ", rejected);
   return res;
 }

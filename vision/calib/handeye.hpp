@@ -33,7 +33,7 @@ struct HandEyeView {
 };
 
 struct HandEyeMethodResult {
-  std::string method;          // "tsai", "park", ..., "refined", "registration"
+  std::string method;          // "tsai", "park", ..., "refined-reproj", "refined", "registration"
   bool valid = false;          // false: threw, NaN, not a rotation, or inconsistent (see note)
   std::string note;            // why it was rejected, or empty
   Pose x, y;                   // X and Y as defined above (Y fitted to X when the method gives only X)
@@ -58,6 +58,10 @@ struct HandEyeOptions {
   double duplicateMm = 0.5, duplicateDeg = 0.1;  // two poses closer than both: duplicate (warning)
   double maxRotResidDeg = 2.0;     // a method whose consistency residual exceeds these is rejected
   double maxTransResidMm = 20.0;
+  // Noise model of the joint refinement ("refined"): the robot's pose repeatability and the
+  // corner noise (0: estimated from the reprojection-only fit).
+  double robotSigmaMm = 0.05, robotSigmaDeg = 0.01;
+  double cornerSigmaPx = 0;
 };
 
 // Solves for X and Y with every method and picks the best. Errors (Status::BadArgument) name

@@ -1,0 +1,283 @@
+#include "daemon/calibrate.hpp"
+
+#include <glob.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include <fmt/core.h>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "sim/calib_scene.hpp"
+#include "vision/calib/handeye.hpp"
+#include "vision/calib/intrinsics.hpp"
+#include "vision/calib/se3.hpp"
+
+namespace vgr::daemon {
+namespace calib = vision::calib;
+namespace se3 = vision::se3;
+namespace fs = std::filesystem;
+
+namespace {
+
+Result<calib::PatternSpec> patternSpec(const CalibPatternOptions& o) {
+  auto kind = calib::parsePatternKind(o.pattern);
+  if (!kind) return std::unexpected(kind.error());
+  if (o.cols < 2 || o.rows < 2) return fail(Status::BadArgument, fmt::format("--cols {} --rows {}: at least 2 each", o.cols, o.rows));
+  if (!(o.squareMm > 0)) return fail(Status::BadArgument, fmt::format("--square {}: must be > 0 mm", o.squareMm));
+  return calib::PatternSpec{*kind, o.cols, o.rows, o.squareMm};
+}
+
+// One progress line per image on stderr: "[#####-----]  5/10 name: status".
+void progress(std::size_t i, std::size_t n, const std::string& name, const std::string& status) {
+  const int width = 20;
+  const int done = static_cast<int>(static_cast<double>(i) * width / static_cast<double>(std::max<std::size_t>(n, 1)));
+  std::fprintf(stderr, "[%s%s] %3zu/%zu %s: %s\n", std::string(static_cast<std::size_t>(done), '#').c_str(),
+               std::string(static_cast<std::size_t>(width - done), '-').c_str(), i, n, name.c_str(), status.c_str());
+}
+
+int bad(const std::string& msg) {
+  std::fprintf(stderr, "vgr calibrate: %s\n", msg.c_str());
+  return 2;
+}
+
+}  // namespace
+
+int runCalibrateIntrinsics(const CalibIntrinsicsOptions& o) {
+  auto spec = patternSpec(o.pattern);
+  if (!spec) return bad(spec.error().message);
+  glob_t g{};
+  const int grc = ::glob(o.images.c_str(), 0, nullptr, &g);
+  std::vector<std::string> files;
+  for (std::size_t i = 0; grc == 0 && i < g.gl_pathc; ++i) files.emplace_back(g.gl_pathv[i]);
+  ::globfree(&g);
+  if (files.empty()) return bad(fmt::format("--images '{}': no file matches", o.images));
+  std::sort(files.begin(), files.end());
+
+  std::vector<calib::ViewDetection> views;
+  cv::Size size;
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    const std::string name = fs::path(files[i]).filename().string();
+    const cv::Mat img = cv::imread(files[i], cv::IMREAD_GRAYSCALE);
+    if (img.empty()) return bad(fmt::format("{}: cannot read the image", files[i]));
+    if (size.width == 0) size = img.size();
+    if (img.size() != size)
+      return bad(fmt::format("{}: {}x{} px, the first image is {}x{} px (one camera, one size)", files[i], img.cols,
+                             img.rows, size.width, size.height));
+    views.push_back(calib::detectPattern(img, *spec, name));
+    progress(i + 1, files.size(), name,
+             views.back().found ? fmt::format("found {} points", views.back().corners.size()) : "pattern NOT found");
+  }
+  auto r = calib::calibrateIntrinsics(views, *spec, size);
+  if (!r) return bad(r.error().message);
+  const auto& c = r->camera;
+  std::printf("per-view reprojection error (px):\n");
+  for (const auto& v : c.views)
+    if (v.used) std::printf("  %-32s %7.3f   tilt %5.1f deg\n", v.name.c_str(), v.rmsPx, v.tiltDeg);
+  for (const auto& v : r->rejectedViews) std::printf("  rejected as outlier, re-solved without: %s\n", v.c_str());
+  for (const auto& v : views)
+    if (!v.found) std::printf("  pattern not found, not used: %s\n", v.name.c_str());
+  std::printf("coverage: %.0f %% of the image, tilt %.1f..%.1f deg\n", r->coverage.imageCoverage * 100,
+              r->coverage.minTiltDeg, r->coverage.maxTiltDeg);
+  for (const auto& a : r->coverage.advice) std::printf("  more views needed: %s\n", a.c_str());
+  std::printf("result: rms %.4f px, fx %.3f fy %.3f cx %.3f cy %.3f, k1 %.5f k2 %.5f p1 %.6f p2 %.6f k3 %.5f, %zu views used\n",
+              c.rmsPx, c.fx(), c.fy(), c.cx(), c.cy(), c.dist[0], c.dist[1], c.dist[2], c.dist[3], c.dist[4],
+              r->usedViews.size());
+  if (auto w = calib::writeIntrinsics(o.out, c); !w) return bad(w.error().message);
+  std::printf("written: %s\n", o.out.c_str());
+  if (o.json) {
+    nlohmann::json j{{"rms_px", c.rmsPx}, {"fx", c.fx()}, {"fy", c.fy()}, {"cx", c.cx()}, {"cy", c.cy()},
+                     {"dist", {c.dist[0], c.dist[1], c.dist[2], c.dist[3], c.dist[4]}},
+                     {"views_used", r->usedViews.size()}, {"views_total", views.size()},
+                     {"rejected", r->rejectedViews}, {"coverage", r->coverage.imageCoverage},
+                     {"advice", r->coverage.advice}, {"out", o.out}};
+    std::printf("%s\n", j.dump().c_str());
+  }
+  return 0;
+}
+
+int runCalibrateHandEye(const CalibHandEyeOptions& o) {
+  auto spec = patternSpec(o.pattern);
+  if (!spec) return bad(spec.error().message);
+  auto cam = calib::readIntrinsics(o.intrinsics);
+  if (!cam) return bad(cam.error().message);
+  const std::string posePath = (fs::path(o.folder) / "poses.txt").string();
+  auto poses = calib::loadPoseFile(posePath);
+  if (!poses) return bad(poses.error().message);
+  // Images in the folder that poses.txt does not mention: a count mismatch worth an error.
+  std::vector<std::string> unlisted;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(o.folder, ec)) {
+    const std::string ext = e.path().extension().string();
+    if (ext != ".png" && ext != ".bmp" && ext != ".tif" && ext != ".tiff" && ext != ".jpg") continue;
+    const std::string n = e.path().filename().string();
+    if (std::none_of(poses->begin(), poses->end(), [&](const auto& p) { return p.image == n; })) unlisted.push_back(n);
+  }
+  if (!unlisted.empty()) {
+    std::sort(unlisted.begin(), unlisted.end());
+    std::string list;
+    for (const auto& u : unlisted) list += (list.empty() ? "" : ", ") + u;
+    return bad(fmt::format("{}: {} poses but {} more images in {} without a pose: {}", posePath, poses->size(),
+                           unlisted.size(), o.folder, list));
+  }
+  std::vector<calib::HandEyeView> views;
+  std::vector<std::string> notFound;
+  for (std::size_t i = 0; i < poses->size(); ++i) {
+    const auto& p = (*poses)[i];
+    const std::string file = (fs::path(o.folder) / p.image).string();
+    const cv::Mat img = cv::imread(file, cv::IMREAD_GRAYSCALE);
+    if (img.empty()) return bad(fmt::format("{}:{}: image '{}' cannot be read", posePath, p.line, p.image));
+    if (img.size() != cam->imageSize)
+      return bad(fmt::format("{}: {}x{} px, the intrinsics are for {}x{} px", file, img.cols, img.rows,
+                             cam->imageSize.width, cam->imageSize.height));
+    auto d = calib::detectPattern(img, *spec, p.image);
+    progress(i + 1, poses->size(), p.image, d.found ? "found" : "pattern NOT found");
+    if (!d.found) {
+      notFound.push_back(p.image);
+      continue;
+    }
+    views.push_back({p.image, p.baseFromGripper, d.corners});
+  }
+  if (!notFound.empty()) {
+    std::string list;
+    for (const auto& u : notFound) list += (list.empty() ? "" : ", ") + u;
+    std::fprintf(stderr, "warning: pattern not found in %zu of %zu images, they are left out: %s\n", notFound.size(),
+                 poses->size(), list.c_str());
+  }
+  Result<calib::HandEyeResult> r = o.configuration == "auto" ? calib::calibrateHandEyeAuto(views, *cam, *spec)
+                                   : o.configuration == "eye-in-hand"
+                                       ? calib::calibrateHandEye(views, *cam, *spec, calib::HandEyeConfig::EyeInHand)
+                                   : o.configuration == "eye-to-hand"
+                                       ? calib::calibrateHandEye(views, *cam, *spec, calib::HandEyeConfig::EyeToHand)
+                                       : Result<calib::HandEyeResult>(fail(Status::BadArgument,
+                                             fmt::format("--configuration '{}': expected eye-in-hand, eye-to-hand or auto",
+                                                         o.configuration)));
+  if (!r) return bad(r.error().message);
+  std::optional<calib::HandEyeFile> truth;
+  if (!o.truth.empty()) {
+    auto t = calib::readHandEye(o.truth);
+    if (!t) return bad(t.error().message);
+    truth = *t;
+  }
+  for (const auto& w : r->warnings) std::printf("warning: %s\n", w.c_str());
+  std::printf("hand-eye %s, %zu views\n", calib::handEyeConfigName(r->config), views.size());
+  std::printf("  %-13s %-5s %11s %11s %10s%s\n", "method", "ok", "resid_mm", "resid_deg", "reproj_px",
+              truth ? "   err_X_mm  err_X_deg" : "");
+  nlohmann::json methods = nlohmann::json::array();
+  for (const auto& m : r->methods) {
+    std::string tr;
+    double emm = -1, edeg = -1;
+    if (truth && m.x.qw * m.x.qw + m.x.qx * m.x.qx + m.x.qy * m.x.qy + m.x.qz * m.x.qz > 0.5) {
+      const se3::Iso d = se3::toIso(truth->x).inverse() * se3::toIso(m.x);
+      emm = d.translation().norm();
+      edeg = se3::rotationAngleDeg(d.linear());
+      tr = fmt::format(" {:10.3f} {:10.4f}", emm, edeg);
+    }
+    std::printf("  %-13s %-5s %11.3f %11.4f %10.3f%s%s\n", m.method.c_str(), m.valid ? "yes" : "NO", m.transResidMm,
+                m.rotResidDeg, m.reprojRmsPx, tr.c_str(), m.valid ? "" : ("  " + m.note).c_str());
+    methods.push_back({{"method", m.method}, {"valid", m.valid}, {"resid_mm", m.transResidMm},
+                       {"resid_deg", m.rotResidDeg}, {"reproj_px", m.reprojRmsPx}, {"note", m.note}});
+    if (truth) methods.back()["err_x_mm"] = emm, methods.back()["err_x_deg"] = edeg;
+  }
+  std::printf("chosen: %s\n", r->reason.c_str());
+  if (auto w = calib::writeHandEye(o.out, *r); !w) return bad(w.error().message);
+  std::printf("written: %s\n", o.out.c_str());
+  if (o.json) {
+    const auto& b = r->bestResult();
+    const Vec3 rv = toRotationVector(b.x);
+    nlohmann::json j{{"configuration", calib::handEyeConfigName(r->config)},
+                     {"method", b.method},
+                     {"x_mm", {b.x.x, b.x.y, b.x.z}},
+                     {"x_rotvec_rad", {rv.x, rv.y, rv.z}},
+                     {"resid_mm", b.transResidMm},
+                     {"resid_deg", b.rotResidDeg},
+                     {"reproj_px", b.reprojRmsPx},
+                     {"views_used", views.size()},
+                     {"methods", methods},
+                     {"out", o.out}};
+    std::printf("%s\n", j.dump().c_str());
+  }
+  return 0;
+}
+
+int runCalibrateSynth(const CalibSynthOptions& o) {
+  auto spec = patternSpec(o.pattern);
+  if (!spec) return bad(spec.error().message);
+  if (o.out.empty()) return bad("--out: a folder is needed");
+  std::error_code ec;
+  fs::create_directories(o.out, ec);
+  if (ec) return bad(fmt::format("{}: {}", o.out, ec.message()));
+  const sim::TrueCamera cam = sim::defaultCalibCamera();
+  sim::PlateRenderOptions ro;
+  // The true camera, in the intrinsics file format (for comparison).
+  calib::CameraIntrinsics truthCam;
+  truthCam.cameraMatrix = cam.cameraMatrix;
+  truthCam.dist = cam.dist;
+  truthCam.imageSize = cam.imageSize;
+  if (auto w = calib::writeIntrinsics((fs::path(o.out) / "camera_truth.yaml").string(), truthCam); !w)
+    return bad(w.error().message);
+  if (o.kind == "intrinsics") {
+    const auto poses = sim::randomPlateViews(cam, *spec, o.views, o.seed, o.distanceMm, o.maxTiltDeg);
+    for (std::size_t i = 0; i < poses.size(); ++i) {
+      ro.seed = o.seed * 1000 + i;
+      const std::string name = fmt::format("plate_{:03d}.png", i);
+      cv::imwrite((fs::path(o.out) / name).string(), sim::renderPlate(cam, *spec, poses[i], ro));
+      progress(i + 1, poses.size(), name, "rendered");
+    }
+    std::printf("%zu plate images and camera_truth.yaml in %s\n", poses.size(), o.out.c_str());
+    return 0;
+  }
+  if (o.kind != "handeye") return bad(fmt::format("--kind '{}': expected intrinsics or handeye", o.kind));
+  calib::HandEyeConfig cfg;
+  if (o.configuration == "eye-in-hand") cfg = calib::HandEyeConfig::EyeInHand;
+  else if (o.configuration == "eye-to-hand") cfg = calib::HandEyeConfig::EyeToHand;
+  else return bad(fmt::format("--configuration '{}': expected eye-in-hand or eye-to-hand", o.configuration));
+  if (o.poseFormat != "abb" && o.poseFormat != "fanuc" && o.poseFormat != "ur")
+    return bad(fmt::format("--pose-format '{}': expected abb, fanuc or ur", o.poseFormat));
+  const auto s = sim::makeHandEyeScenario(cfg, cam, *spec, o.views, o.seed, o.robotNoiseMm, o.robotNoiseDeg);
+  std::ofstream pf(fs::path(o.out) / "poses.txt");
+  pf << "# robot poses T_base_gripper as the controller reports them, one line per image\n";
+  pf << "format " << o.poseFormat << "\nunits " << (o.poseFormat == "ur" ? "m" : "mm") << "\n";
+  for (std::size_t i = 0; i < s.camFromPlate.size(); ++i) {
+    ro.seed = o.seed * 1000 + i;
+    const std::string name = fmt::format("pose_{:03d}.png", i);
+    cv::imwrite((fs::path(o.out) / name).string(), sim::renderPlate(cam, *spec, s.camFromPlate[i], ro));
+    const Pose& p = s.robotReported[i];
+    if (o.poseFormat == "abb") {
+      pf << fmt::format("{} {:.4f} {:.4f} {:.4f} {:.9f} {:.9f} {:.9f} {:.9f}\n", name, p.x, p.y, p.z, p.qw, p.qx, p.qy, p.qz);
+    } else if (o.poseFormat == "fanuc") {
+      const EulerZyxDeg e = toEulerZyxDeg(p);
+      pf << fmt::format("{} {:.4f} {:.4f} {:.4f} {:.6f} {:.6f} {:.6f}\n", name, p.x, p.y, p.z, e.rx, e.ry, e.rz);
+    } else {
+      const Vec3 rv = toRotationVector(p);
+      pf << fmt::format("{} {:.7f} {:.7f} {:.7f} {:.9f} {:.9f} {:.9f}\n", name, p.x / 1000, p.y / 1000, p.z / 1000, rv.x,
+                        rv.y, rv.z);
+    }
+    progress(i + 1, s.camFromPlate.size(), name, "rendered");
+  }
+  pf.close();
+  // truth.yaml in the handeye.yaml layout, so `vgr calibrate handeye --truth` can read it.
+  try {
+    cv::FileStorage f((fs::path(o.out) / "truth.yaml").string(), cv::FileStorage::WRITE);
+    auto mat = [](const Pose& p) {
+      const Eigen::Matrix4d m = se3::toIso(p).matrix();
+      cv::Mat out(4, 4, CV_64F);
+      for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) out.at<double>(i, j) = m(i, j);
+      return out;
+    };
+    f << "calibration_kind" << "handeye_truth" << "configuration" << calib::handEyeConfigName(cfg);
+    f << "x" << mat(s.x) << "y" << mat(s.y) << "method" << "truth";
+  } catch (const cv::Exception& e) {
+    return bad(e.what());
+  }
+  std::printf("%zu images, poses.txt (%s), truth.yaml and camera_truth.yaml in %s\n", s.camFromPlate.size(),
+              o.poseFormat.c_str(), o.out.c_str());
+  return 0;
+}
+
+}  // namespace vgr::daemon

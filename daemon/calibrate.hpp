@@ -1,0 +1,49 @@
+// `vgr calibrate ...`: intrinsics from plate images, hand-eye from a folder of images + robot
+// poses, and synthetic data sets with ground truth (docs/calibration.md). Each returns the
+// process exit code: 0 ok, 2 bad input (message on stderr naming file / view / key).
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+namespace vgr::daemon {
+
+struct CalibPatternOptions {
+  std::string pattern = "chessboard";  // chessboard | circles (charuco: not yet)
+  int cols = 9, rows = 6;              // inner corners (chessboard) / circles per row, column
+  double squareMm = 20;                // square size / circle spacing, mm
+};
+
+struct CalibIntrinsicsOptions {
+  std::string images;  // glob, e.g. "/data/calib/*.png"
+  CalibPatternOptions pattern;
+  std::string out = "intrinsics.yaml";
+  bool json = false;
+};
+int runCalibrateIntrinsics(const CalibIntrinsicsOptions& o);
+
+struct CalibHandEyeOptions {
+  std::string folder;          // holds poses.txt and the images it names
+  std::string intrinsics;      // intrinsics.yaml
+  std::string configuration = "auto";  // eye-in-hand | eye-to-hand | auto
+  CalibPatternOptions pattern;
+  std::string out = "handeye.yaml";
+  std::string truth;           // optional: a truth.yaml from `vgr calibrate synth` -> errors per method
+  bool json = false;
+};
+int runCalibrateHandEye(const CalibHandEyeOptions& o);
+
+struct CalibSynthOptions {
+  std::string kind = "intrinsics";     // intrinsics | handeye
+  std::string out;                     // folder (created)
+  std::string configuration = "eye-to-hand";
+  std::string poseFormat = "abb";      // abb | fanuc | ur
+  CalibPatternOptions pattern;
+  int views = 20;
+  std::uint64_t seed = 1;
+  double robotNoiseMm = 0.05, robotNoiseDeg = 0.01;
+  double maxTiltDeg = 40, distanceMm = 420;
+};
+int runCalibrateSynth(const CalibSynthOptions& o);
+
+}  // namespace vgr::daemon

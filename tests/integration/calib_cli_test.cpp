@@ -1,0 +1,123 @@
+// `vgr calibrate` end to end on rendered synthetic sets: intrinsics (--json contract),
+// hand-eye from a folder of images + poses.txt, and the bad-input errors a user sees.
+// No sockets: the real `vgr` binary on files in a temporary folder.
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "vision/calib/handeye.hpp"
+#include "vision/calib/intrinsics.hpp"
+#include "vision/calib/se3.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CmdRun {
+  int rc = -1;
+  std::string out;  // stdout + stderr
+};
+
+CmdRun vgr(const std::string& args) {
+  CmdRun r;
+  const std::string cmd = std::string(VGR_BIN_DIR) + "/vgr " + args + " 2>&1";
+  FILE* p = ::popen(cmd.c_str(), "r");
+  if (!p) return r;
+  char buf[4096];
+  while (std::fgets(buf, sizeof buf, p)) r.out += buf;
+  const int st = ::pclose(p);
+  r.rc = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  return r;
+}
+
+std::string lastLine(const std::string& s) {
+  std::string t = s;
+  while (!t.empty() && t.back() == '\n') t.pop_back();
+  const auto nl = t.rfind('\n');
+  return nl == std::string::npos ? t : t.substr(nl + 1);
+}
+
+class calib_cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("vgr-calib-cli-" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path dir_;
+};
+
+TEST_F(calib_cli, intrinsics_then_handeye_on_rendered_sets) {
+  const std::string intr = (dir_ / "intr").string(), he = (dir_ / "he").string();
+  CmdRun s = vgr("calibrate synth --kind intrinsics --views 10 --out " + intr);
+  ASSERT_EQ(s.rc, 0) << s.out;
+  // A view in which the pattern is not there: reported by name, left out.
+  cv::imwrite((dir_ / "intr" / "plate_blank.png").string(), cv::Mat(600, 800, CV_8UC1, cv::Scalar(120)));
+  CmdRun r = vgr("calibrate intrinsics --images '" + intr + "/*.png' --pattern chessboard --cols 9 --rows 6 --square 20 --out " +
+              intr + "/intrinsics.yaml --json");
+  ASSERT_EQ(r.rc, 0) << r.out;
+  EXPECT_NE(r.out.find("pattern not found, not used: plate_blank.png"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("11/11"), std::string::npos) << "progress per image";
+  const auto j = nlohmann::json::parse(lastLine(r.out));
+  for (const char* k : {"rms_px", "fx", "fy", "cx", "cy", "views_used"}) EXPECT_TRUE(j.contains(k)) << k;
+  EXPECT_EQ(j["views_used"].get<int>(), 10);
+  EXPECT_LT(j["rms_px"].get<double>(), 0.2);
+  EXPECT_NEAR(j["fx"].get<double>(), 900.0, 9.0);  // 10 views: a pipeline check, not the accuracy bound
+  auto file = vgr::vision::calib::readIntrinsics(intr + "/intrinsics.yaml");
+  ASSERT_TRUE(file) << file.error().message;
+  EXPECT_DOUBLE_EQ(file->fx(), j["fx"].get<double>());
+
+  s = vgr("calibrate synth --kind handeye --configuration eye-to-hand --pose-format ur --views 10 --out " + he);
+  ASSERT_EQ(s.rc, 0) << s.out;
+  r = vgr("calibrate handeye --folder " + he + " --intrinsics " + intr +
+          "/intrinsics.yaml --cols 9 --rows 6 --square 20 --truth " + he + "/truth.yaml --out " + he + "/handeye.yaml --json");
+  ASSERT_EQ(r.rc, 0) << r.out;
+  const auto h = nlohmann::json::parse(lastLine(r.out));
+  EXPECT_EQ(h["configuration"], "eye-to-hand");  // found by auto
+  EXPECT_EQ(h["methods"].size(), 10u);
+  auto heFile = vgr::vision::calib::readHandEye(he + "/handeye.yaml");
+  auto truth = vgr::vision::calib::readHandEye(he + "/truth.yaml");
+  ASSERT_TRUE(heFile && truth);
+  namespace se3 = vgr::vision::se3;
+  const se3::Iso d = se3::toIso(truth->x).inverse() * se3::toIso(heFile->x);
+  EXPECT_LT(d.translation().norm(), 1.0);  // 10 rendered views, estimated intrinsics
+  EXPECT_LT(se3::rotationAngleDeg(d.linear()), 0.1);
+
+  // An image without a pose: the count mismatch names it.
+  fs::copy_file(he + "/pose_000.png", he + "/extra.png");
+  r = vgr("calibrate handeye --folder " + he + " --intrinsics " + intr + "/intrinsics.yaml --out " + he + "/x.yaml");
+  EXPECT_EQ(r.rc, 2);
+  EXPECT_NE(r.out.find("without a pose: extra.png"), std::string::npos) << r.out;
+  fs::remove(he + "/extra.png");
+  // A pose whose image is missing: named with file and line.
+  fs::remove(he + "/pose_003.png");
+  r = vgr("calibrate handeye --folder " + he + " --intrinsics " + intr + "/intrinsics.yaml --out " + he + "/x.yaml");
+  EXPECT_EQ(r.rc, 2);
+  EXPECT_NE(r.out.find("poses.txt:7: image 'pose_003.png' cannot be read"), std::string::npos) << r.out;
+}
+
+TEST_F(calib_cli, too_few_views_and_no_images_are_clear_errors) {
+  for (int i = 0; i < 3; ++i)
+    cv::imwrite((dir_ / ("blank" + std::to_string(i) + ".png")).string(), cv::Mat(480, 640, CV_8UC1, cv::Scalar(90)));
+  CmdRun r = vgr("calibrate intrinsics --images '" + dir_.string() + "/*.png' --out " + (dir_ / "i.yaml").string());
+  EXPECT_EQ(r.rc, 2);
+  EXPECT_NE(r.out.find("too few views"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("blank0.png, blank1.png, blank2.png"), std::string::npos) << r.out;
+  r = vgr("calibrate intrinsics --images '" + dir_.string() + "/none*.png'");
+  EXPECT_EQ(r.rc, 2);
+  EXPECT_NE(r.out.find("no file matches"), std::string::npos) << r.out;
+  r = vgr("calibrate intrinsics --images '" + dir_.string() + "/*.png' --pattern hexagons");
+  EXPECT_EQ(r.rc, 2);
+  EXPECT_NE(r.out.find("unknown pattern 'hexagons'"), std::string::npos) << r.out;
+}
+
+}  // namespace

@@ -1,0 +1,87 @@
+#include "vision/calib/mapping.hpp"
+
+#include <cmath>
+
+#include <Eigen/SVD>
+#include <fmt/core.h>
+#include <opencv2/calib3d.hpp>
+
+#include "vision/calib/se3.hpp"
+
+namespace vgr::vision::calib {
+namespace {
+
+Eigen::Vector3d ev(const Vec3& v) { return {v.x, v.y, v.z}; }
+Vec3 vv(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
+
+}  // namespace
+
+WorkPlane planeFromPlate(const Pose& baseFromCamera, const Pose& camFromPlate, double plateThicknessMm) {
+  const se3::Iso t = se3::toIso(baseFromCamera) * se3::toIso(camFromPlate);
+  Eigen::Vector3d n = t.linear().col(2);
+  const Eigen::Vector3d camPos = se3::toIso(baseFromCamera).translation();
+  if (n.dot(camPos - t.translation()) < 0) n = -n;  // toward the camera (up from the plate)
+  WorkPlane p;
+  p.point = vv(t.translation() - plateThicknessMm * n);
+  p.normal = vv(n);
+  return p;
+}
+
+Result<WorkPlane> planeFromPoints(const std::vector<Vec3>& pts) {
+  if (pts.size() < 3)
+    return fail(Status::BadArgument, fmt::format("work plane: {} touched points, at least 3 needed", pts.size()));
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (const auto& p : pts) c += ev(p);
+  c /= static_cast<double>(pts.size());
+  Eigen::MatrixXd m(pts.size(), 3);
+  for (std::size_t i = 0; i < pts.size(); ++i) m.row(static_cast<Eigen::Index>(i)) = (ev(pts[i]) - c).transpose();
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(m, Eigen::ComputeThinV);
+  const Eigen::Vector3d s = svd.singularValues();
+  if (s(1) < 1e-6 * std::max(1.0, s(0)))
+    return fail(Status::BadArgument, "work plane: the touched points are collinear (or all the same point)");
+  Eigen::Vector3d n = svd.matrixV().col(2);
+  if (n.z() < 0) n = -n;
+  WorkPlane p;
+  p.point = vv(c);
+  p.normal = vv(n.normalized());
+  p.fitRmsMm = s(2) / std::sqrt(static_cast<double>(pts.size()));
+  return p;
+}
+
+CameraPlaneMapping::CameraPlaneMapping(const CameraIntrinsics& camera, const Pose& baseFromCamera,
+                                       const WorkPlane& plane)
+    : camera_(camera), baseFromCamera_(baseFromCamera), plane_(plane) {
+  Eigen::Vector3d n = ev(plane_.normal).normalized();
+  const Eigen::Vector3d camPos = se3::toIso(baseFromCamera_).translation();
+  if (n.dot(camPos - ev(plane_.point)) < 0) n = -n;
+  plane_.normal = vv(n);
+}
+
+std::optional<Vec3> CameraPlaneMapping::pixelToRobot(PixelPoint p, double heightMm) const {
+  // Distortion removed (iteratively, to 1e-12), then the normalised ray (paper 002, eqs. 5-7)
+  // in the base frame, intersected with the raised plane (eqs. 8-11).
+  std::vector<cv::Point2d> src{{p.u, p.v}}, dst;
+  cv::undistortPoints(src, dst, camera_.cameraMatrix, camera_.dist, cv::noArray(), cv::noArray(),
+                      cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 50, 1e-12));
+  const se3::Iso t = se3::toIso(baseFromCamera_);
+  const Eigen::Vector3d dir = t.linear() * Eigen::Vector3d(dst[0].x, dst[0].y, 1.0);
+  const Eigen::Vector3d o = t.translation();
+  const Eigen::Vector3d n = ev(plane_.normal);
+  const Eigen::Vector3d q = ev(plane_.point) + heightMm * n;
+  const double den = n.dot(dir);
+  if (std::abs(den) < 1e-12) return std::nullopt;
+  const double s = n.dot(q - o) / den;
+  if (s <= 0) return std::nullopt;
+  return vv(o + s * dir);
+}
+
+std::optional<PixelPoint> CameraPlaneMapping::robotToPixel(const Vec3& pb) const {
+  const Eigen::Vector3d pc = se3::toIso(baseFromCamera_).inverse() * ev(pb);
+  if (pc.z() <= 1e-9) return std::nullopt;
+  std::vector<cv::Point3d> obj{{pc.x(), pc.y(), pc.z()}};
+  std::vector<cv::Point2d> img;
+  cv::projectPoints(obj, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), camera_.cameraMatrix, camera_.dist, img);
+  return PixelPoint{img[0].x, img[0].y};
+}
+
+}  // namespace vgr::vision::calib

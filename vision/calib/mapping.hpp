@@ -1,0 +1,55 @@
+// Work plane and pixel <-> robot mapping with a calibrated camera (with lens distortion):
+// the ray/plane intersection of paper 002 (eqs. 5-11, the "virtual plane", part height added
+// along the plane normal), and the inverse projection for overlays.
+// Frames: base = robot base, mm. Pure geometry; cheap to copy; thread-compatible (const).
+#pragma once
+
+#include <optional>
+#include <vector>
+
+#include "core/pose.hpp"
+#include "core/result.hpp"
+#include "vision/calib/intrinsics.hpp"
+#include "vision/calib/plane_model.hpp"
+
+namespace vgr::vision::calib {
+
+// A plane in the base frame: a point on it and its unit normal.
+struct WorkPlane {
+  Vec3 point;
+  Vec3 normal{0, 0, 1};
+  double fitRmsMm = 0;  // planeFromPoints: RMS distance of the points to the plane
+};
+
+// (a) From a calibration plate lying on the conveyor, seen by the calibrated camera
+// (T_cam_plate from solvePnP) and the camera pose in the base frame (hand-eye). The plate's
+// top is plateThicknessMm above the conveyor: the plane is moved down by that much.
+WorkPlane planeFromPlate(const Pose& baseFromCamera, const Pose& camFromPlate, double plateThicknessMm = 0);
+
+// (b) From N >= 3 robot-touched points (paper 001's grid at height 0): least-squares plane
+// (SVD). Errors name the problem (too few, collinear). Normal points to base +z.
+Result<WorkPlane> planeFromPoints(const std::vector<Vec3>& pointsBase);
+
+class CameraPlaneMapping {
+ public:
+  // baseFromCamera: T_base_cam (eye-to-hand: X; eye-in-hand: T_base_gripper at the
+  // snapshot pose times X). The plane normal is turned to face the camera, so heights are
+  // measured toward the camera.
+  CameraPlaneMapping(const CameraIntrinsics& camera, const Pose& baseFromCamera, const WorkPlane& plane);
+
+  // The point of the pixel's viewing ray (distortion removed) on the plane raised by
+  // heightMm along its normal. Empty when the ray misses the plane (parallel or behind).
+  std::optional<Vec3> pixelToRobot(PixelPoint p, double heightMm = 0) const;
+
+  // Projection of a base-frame point with the lens distortion; empty when behind the camera.
+  std::optional<PixelPoint> robotToPixel(const Vec3& pointBase) const;
+
+  const WorkPlane& plane() const { return plane_; }
+
+ private:
+  CameraIntrinsics camera_;
+  Pose baseFromCamera_;
+  WorkPlane plane_;
+};
+
+}  // namespace vgr::vision::calib
