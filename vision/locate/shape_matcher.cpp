@@ -266,7 +266,7 @@ void ShapeLocator::searchTop(Worker& w, int first, int stride, double thr) {
         continue;
       }
       for (int i = 0; i < topW_; ++i) acc[i] = (absGlobal ? std::abs(acc[i]) : acc[i]) * invN;
-      // Keep the sign for ignore_global in a second pass below (recomputed from the partial map).
+      // (ignore_global: the sign is not kept here; the next level's scoreAt() finds it.)
     }
     // Local maxima (8-neighbourhood) above thr.
     const float t = static_cast<float>(thr);
@@ -315,7 +315,6 @@ void ShapeLocator::levelGradients(int level, const Candidate& c, double extra) {
   // A 1-px margin so that the Sobel kernel sees real neighbours; BORDER_ISOLATED keeps OpenCV
   // from reading outside the window (stale buffers).
   const cv::Rect outer = cv::Rect(win.x - 1, win.y - 1, win.width + 2, win.height + 2) & full;
-  const cv::Rect inner(win.x - outer.x, win.y - outer.y, win.width, win.height);
   cv::Mat gxo = gx_[level](outer), gyo = gy_[level](outer);
   cv::Sobel(img(outer), gxo, CV_32F, 1, 0, 3, 1.0 / 8, 0, kBorderFlags);
   cv::Sobel(img(outer), gyo, CV_32F, 0, 1, 3, 1.0 / 8, 0, kBorderFlags);
@@ -331,7 +330,6 @@ void ShapeLocator::levelGradients(int level, const Candidate& c, double extra) {
       u[x] = a[x] * inv, v[x] = b[x] * inv;
     }
   }
-  (void)inner;
 }
 
 // The smoothed level-0 gradient around c for the refinement (sigma 1 px, like the model's).
@@ -408,7 +406,6 @@ bool ShapeLocator::trackDown(int level, Candidate& c, double thr) {
 // (the peak interpolation of the issue; the least-squares refinement follows).
 void ShapeLocator::interpolatePeak(Candidate& c) {
   const double step = m_.levels[0].angleStep;
-  const int x = cvRound(c.x), y = cvRound(c.y);
   // Hill-climb first so the peak is interior.
   for (int it = 0; it < 4; ++it) {
     bool moved = false;
@@ -427,7 +424,6 @@ void ShapeLocator::interpolatePeak(Candidate& c) {
       }
     if (!moved) break;
   }
-  (void)x, (void)y;
   auto vertex = [](double sm, double s0, double sp) {
     const double den = sm - 2 * s0 + sp;
     return den < 0 ? std::clamp(0.5 * (sm - sp) / den, -0.5, 0.5) : 0.0;
