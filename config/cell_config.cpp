@@ -14,6 +14,8 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "config/job.hpp"
+
 namespace vgr::config {
 namespace {
 
@@ -304,11 +306,36 @@ void parseRobot(Section s, RobotConfig& r) {
   s.finish();
 }
 
+// A job with `folder`: its job.yaml (config/job.hpp) gives the method, grasp height and
+// reference; the cell entry may only name it, override the method and set the angle offset.
+void parseJobFolder(Section& s, JobConfig& j) {
+  namespace fs = std::filesystem;
+  fs::path folder(j.folder);
+  if (folder.is_relative()) folder = fs::path(s.file()).parent_path() / folder;
+  j.folder = folder.lexically_normal().string();
+  for (const char* k : {"threshold", "min_area_px", "max_area_px", "part_height_mm", "reference"})
+    if (s.get(k)) s.fail(s.get(k), k, std::string("set in the job folder's job.yaml, not here (the job has a 'folder')"));
+  auto job = loadJob(j.folder);
+  if (!job) s.fail(s.get("folder"), "folder", job.error().message);
+  if (!fs::exists(job->templatePath())) s.fail(s.get("folder"), "folder", job->templatePath() + ": the template image is missing");
+  j.method = job->method;
+  s.read<std::string>("method", j.method);  // an override; checked when vgrd builds it
+  s.read<double>("angle_offset_deg", j.angleOffsetDeg, inRange(-360.0, 360.0), "[-360, 360]");
+  j.partHeightMm = job->partHeightMm;
+  j.reference = {job->referenceXMm, job->referenceYMm, job->referenceZMm, job->referenceRzDeg};
+  s.finish();
+}
+
 void parseJob(Section s, JobConfig& j) {
   s.require("id");
   s.read<int>("id", j.id, inRange(1, 32767), "[1, 32767]");
   s.read<std::string>("name", j.name);
-  s.read<std::string>("method", j.method, oneOf({"moments"}), "one of: moments");
+  s.read<std::string>("folder", j.folder);
+  if (!j.folder.empty()) {
+    parseJobFolder(s, j);
+    return;
+  }
+  s.read<std::string>("method", j.method, oneOf({"moments"}), "one of: moments (other methods need a job folder: 'folder')");
   s.read<int>("threshold", j.threshold, inRange(0, 255), "[0, 255]");
   s.read<double>("min_area_px", j.minAreaPx, [](const double& v) { return v > 0; }, "> 0");
   s.read<double>("max_area_px", j.maxAreaPx, [](const double& v) { return v > 0; }, "> 0");

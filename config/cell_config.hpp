@@ -140,6 +140,11 @@ struct JobConfig {
   double partHeightMm = 0;     // mm, [0, 1000]: grasp height above the conveyor plane
   double angleOffsetDeg = 0;   // deg: template orientation relative to the locator's axis
   ReferencePose reference;     // taught reference the offsets are given from
+  // A job folder (`vgr teach`, docs/localization.md), resolved against the config file's
+  // folder; empty = the moments method with the keys above. With a folder, the method
+  // (unless `method` is given here), part_height_mm and reference come from its job.yaml,
+  // and vgrd builds the method at start.
+  std::string folder;
 };
 
 struct SimConfig {

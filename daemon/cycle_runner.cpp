@@ -2,7 +2,11 @@
 
 #include <cmath>
 
+#include <fmt/core.h>
 #include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "config/job.hpp"
 
 #include "core/log.hpp"
 #include "vision/locate/moments_locator.hpp"
@@ -54,6 +58,21 @@ CycleRunner::CycleRunner(const config::CellConfig& cell, CameraWorker& camera, C
 }
 
 CycleRunner::~CycleRunner() { stop(); }
+
+Result<void> CycleRunner::prepareJobs() {
+  for (const auto& job : cell_.jobs) {
+    if (job.folder.empty()) continue;
+    auto jf = config::loadJob(job.folder);
+    if (!jf) return std::unexpected(jf.error());
+    const cv::Mat templ = cv::imread(jf->templatePath(), cv::IMREAD_GRAYSCALE);
+    if (templ.empty()) return fail(Status::BadArgument, jf->templatePath() + ": cannot read the template image");
+    auto loc = vision::makeLocator(job.method, templ, jf->taught);
+    if (!loc) return fail(loc.error().code, fmt::format("job {} ({}): {}", job.id, job.folder, loc.error().message));
+    log::info("cycle", "job {}: method {} from {}", job.id, job.method, job.folder);
+    locators_[job.id] = std::move(*loc);
+  }
+  return {};
+}
 
 void CycleRunner::start() { thread_ = std::thread([this] { run(); }); }
 
@@ -153,11 +172,19 @@ CycleResult CycleRunner::runCycle(const Trigger& t) {
     wide.convertTo(gray8, CV_8UC1, 1.0 / (1 << (frame_.bitDepth - 8)));
     image = gray8;
   }
-  vision::MomentsParams params;
-  params.threshold = job->threshold;
-  params.minAreaPx = job->minAreaPx;
-  params.maxAreaPx = job->maxAreaPx;
-  auto found = vision::locateByMoments(image, params);
+  Result<std::vector<vision::Detection>> found;
+  if (const auto it = locators_.find(job->id); it != locators_.end()) {
+    // A taught job (folder): its method, built at start (prepareJobs).
+    auto out = it->second->locate(image);
+    if (out) found = std::move(out->parts);
+    else found = std::unexpected(out.error());
+  } else {
+    vision::MomentsParams params;
+    params.threshold = job->threshold;
+    params.minAreaPx = job->minAreaPx;
+    params.maxAreaPx = job->maxAreaPx;
+    found = vision::locateByMoments(image, params);
+  }
   r.locateMs = msSince(locateStart);
   if (!found) {
     r.status = found.error().code;

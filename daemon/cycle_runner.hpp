@@ -10,6 +10,8 @@
 #include <cstdint>
 #include <deque>
 #include <functional>
+#include <map>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -20,6 +22,7 @@
 #include "daemon/camera_worker.hpp"
 #include "vision/calib/mapping.hpp"
 #include "vision/calib/plane_model.hpp"
+#include "vision/locate/locator.hpp"
 
 namespace vgr::daemon {
 
@@ -40,6 +43,9 @@ class CycleRunner {
   CycleRunner(const config::CellConfig& cell, CameraWorker& camera, CycleSinks sinks);
   ~CycleRunner();
 
+  // Start-up, before start(): builds the method of every job with a folder (job.yaml,
+  // template, vision::makeLocator). Errors name the job folder's file and what is wrong.
+  Result<void> prepareJobs();
   void start();
   void stop();  // finishes the running cycle, answers queued triggers with INTERNAL, joins
 
@@ -76,6 +82,7 @@ class CycleRunner {
   std::uint32_t nextCycleId_ = 1;
   std::atomic<std::uint64_t> overruns_{0};
   drivers::Frame frame_;
+  std::map<int, std::unique_ptr<vision::Locator>> locators_;  // by job id; jobs with a folder
 };
 
 }  // namespace vgr::daemon

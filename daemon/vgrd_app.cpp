@@ -151,6 +151,7 @@ Result<void> VgrdApp::start() {
   sinks.onStarted = [&s](std::uint32_t id, int job) { asio::post(s.io, [&s, id, job] { s.results->onCycleStarted(id, job); }); };
   sinks.onResult = [&s](const CycleResult& r) { s.publish(r); };
   s.cycles = std::make_unique<CycleRunner>(s.cfg, *s.camera, std::move(sinks));
+  if (auto r = s.cycles->prepareJobs(); !r) return r;
 
   for (const auto& rc : s.cfg.robots) {
     protocol::RobotEndpoint ep;

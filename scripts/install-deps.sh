@@ -11,6 +11,7 @@ PACKAGES=(
   libmodbus-dev mbpoll python3-pymodbus
   libboost-dev libspdlog-dev libfmt-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
   libsystemd-dev systemd
+  iproute2  # camera_multi_test adds 127.0.0.2 to lo for a second emulated camera
   libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev
 )

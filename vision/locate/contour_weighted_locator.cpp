@@ -40,6 +40,7 @@ struct CwParams {
   int autoRegions = 3;          // [1, 16] regions split by position when the job gives none
   double rDeg = 5;              // [0.1, 45] eq. (6) rotation radius r (paper: 5)
   double lFraction = 0.2;       // [0.01, 1] eq. (6) translation radius l / circumscribed radius (paper: 0.2)
+  bool perHeightShift = true;   // a translation per height group (see searchGrid); false = eq. (6) as written
 };
 
 // One contour point of the template, relative to the grasp point, with its unit gradient
@@ -83,60 +84,100 @@ inline cv::Vec2f sampleBilinear(const cv::Mat& g, float x, float y) {
   return (r0[0] * (1 - fx) + r0[1] * fx) * (1 - fy) + (r1[0] * (1 - fx) + r1[1] * fx) * fy;
 }
 
-// Paper 000, eq. (5) at one pose: the template turned counter-clockwise (as displayed) by
+// Paper 000, eq. (5) at one pose, summed over `pts` (not yet divided by their weight): the template turned counter-clockwise (as displayed) by
 // theta about the grasp point, the grasp point at (u, v) of the gradient image.
 template <bool kBilinear>
 double similarity(const cv::Mat& grad, const std::vector<ContourPoint>& pts, double u, double v, double thetaDeg) {
   const float c = static_cast<float>(std::cos(thetaDeg * kDegToRad)), s = static_cast<float>(std::sin(thetaDeg * kDegToRad));
   const float fu = static_cast<float>(u), fv = static_cast<float>(v);
-  double sum = 0, wsum = 0;
+  double sum = 0;
   for (const ContourPoint& k : pts) {
     // (x, y) -> (x cos + y sin, -x sin + y cos): counter-clockwise as displayed, y down.
     const float x = fu + k.p.x * c + k.p.y * s, y = fv - k.p.x * s + k.p.y * c;
     const float tx = k.g.x * c + k.g.y * s, ty = -k.g.x * s + k.g.y * c;
     const cv::Vec2f b = kBilinear ? sampleBilinear(grad, x, y) : sampleNearest(grad, x, y);
     sum += k.weight * (tx * b[0] + ty * b[1]);
-    wsum += k.weight;
   }
-  return wsum > 0 ? sum / wsum : 0;
+  return sum;  // the caller divides by the points' total weight
 }
 
+// A pose of eq. (6): the rotation theta and, per height group, where that group puts the
+// grasp point (all groups share theta; see searchGrid).
 struct Pose {
-  double u = 0, v = 0, theta = 0, score = -2;
+  double theta = 0;
+  std::vector<cv::Point2d> d;  // per group, image px
+  double score = -2;
 };
 
-// Exhaustive search of eq. (6) on a grid around `centre`, clipped to the eq. (6) box.
+// Exhaustive search of eq. (6) on a grid around `centre` (angle +- angRange, every group's
+// translation +- posRange), clipped to the eq. (6) box theta_init +- r, d_init +- l.
+// Height groups: paper 000 moves all contours by one (theta, d). The projection difference
+// moves the contours of each height by its own translation (a layer at height h is imaged
+// with scale Hc / (Hc - h) about the principal point in the template and in the live image
+// alike, so between the two it only turns and shifts), so with perHeightShift each group of
+// regions of one height gets its own d for the same theta: S(theta) = sum over groups of
+// max over d_g of the group's part of eq. (5). With one group this is eq. (6) as written.
 template <bool kBilinear>
-Pose searchGrid(const cv::Mat& grad, const std::vector<ContourPoint>& pts, const Pose& centre, double angRange,
-                double angStep, double posRange, double posStep, const Pose& init, double r, double l) {
+Pose searchGrid(const cv::Mat& grad, const std::vector<std::vector<ContourPoint>>& groups, double totalWeight,
+                const Pose& centre, double angRange, double angStep, double posRange, double posStep, double thetaInit,
+                cv::Point2d dInit, double r, double l) {
   Pose best;
   const int na = static_cast<int>(std::round(angRange / angStep)), np = static_cast<int>(std::round(posRange / posStep));
+  Pose cur;
+  cur.d.resize(groups.size());
   for (int ia = -na; ia <= na; ++ia) {
-    const double th = centre.theta + ia * angStep;
-    if (std::abs(th - init.theta) > r) continue;
-    for (int iy = -np; iy <= np; ++iy) {
-      const double v = centre.v + iy * posStep;
-      if (std::abs(v - init.v) > l) continue;
-      for (int ix = -np; ix <= np; ++ix) {
-        const double u = centre.u + ix * posStep;
-        if (std::abs(u - init.u) > l) continue;
-        const double s = similarity<kBilinear>(grad, pts, u, v, th);
-        if (s > best.score) best = {u, v, th, s};
+    cur.theta = centre.theta + ia * angStep;
+    if (std::abs(cur.theta - thetaInit) > r) continue;
+    double total = 0;
+    for (size_t g = 0; g < groups.size(); ++g) {
+      double bestG = -1e300;
+      for (int iy = -np; iy <= np; ++iy) {
+        const double v = centre.d[g].y + iy * posStep;
+        if (std::abs(v - dInit.y) > l) continue;
+        for (int ix = -np; ix <= np; ++ix) {
+          const double u = centre.d[g].x + ix * posStep;
+          if (std::abs(u - dInit.x) > l) continue;
+          const double sg = similarity<kBilinear>(grad, groups[g], u, v, cur.theta);
+          if (sg > bestG) {
+            bestG = sg;
+            cur.d[g] = {u, v};
+          }
+        }
       }
+      total += bestG;
     }
+    cur.score = total / totalWeight;
+    if (cur.score > best.score) best = cur;
   }
   return best;
 }
 
+double totalWeight(const std::vector<std::vector<ContourPoint>>& groups) {
+  double w = 0;
+  for (const auto& g : groups)
+    for (const auto& k : g) w += k.weight;
+  return w;
+}
+
 class ContourWeightedLocator final : public Locator {
  public:
-  ContourWeightedLocator(const TaughtTemplate& taught, CwParams p, Features tmpl, std::vector<ContourPoint> pts,
-                         double partArea, double circumRadius)
-      : taught_(taught), p_(std::move(p)), tmpl_(std::move(tmpl)), pts_(std::move(pts)), partArea_(partArea),
-        l_(p_.lFraction * circumRadius) {
-    // A thinned copy for the coarse search stage.
-    const size_t stride = std::max<size_t>(1, pts_.size() / 400);
-    for (size_t k = 0; k < pts_.size(); k += stride) coarse_.push_back(pts_[k]);
+  // groups: the contour points by height group; graspGroup: the group whose translation
+  // is the grasp point's.
+  ContourWeightedLocator(const TaughtTemplate& taught, CwParams p, Features tmpl,
+                         std::vector<std::vector<ContourPoint>> groups, size_t graspGroup, double partArea,
+                         double circumRadius)
+      : taught_(taught), p_(std::move(p)), tmpl_(std::move(tmpl)), groups_(std::move(groups)), graspGroup_(graspGroup),
+        partArea_(partArea), l_(p_.lFraction * circumRadius) {
+    // A thinned copy (about 400 points) for the coarse search stage.
+    size_t n = 0;
+    for (const auto& g : groups_) n += g.size();
+    const size_t stride = std::max<size_t>(1, n / 400);
+    for (const auto& g : groups_) {
+      coarse_.emplace_back();
+      for (size_t k = 0; k < g.size(); k += stride) coarse_.back().push_back(g[k]);
+    }
+    weight_ = totalWeight(groups_);
+    coarseWeight_ = totalWeight(coarse_);
   }
 
   std::string_view method() const override { return "contour-weighted"; }
@@ -258,21 +299,23 @@ class ContourWeightedLocator final : public Locator {
     const double a = A.at<double>(0, 0), b = A.at<double>(1, 0);
     const double scale = std::hypot(a, b);
     if (scale < 0.8 || scale > 1.25) return false;
-    Pose init;
-    init.theta = -std::atan2(b, a) / kDegToRad;
-    init.u = box.x + a * taught_.grasp.u - b * taught_.grasp.v + A.at<double>(0, 2);  // d_init: the grasp point through it
-    init.v = box.y + b * taught_.grasp.u + a * taught_.grasp.v + A.at<double>(1, 2);
+    const double thetaInit = -std::atan2(b, a) / kDegToRad;
+    const cv::Point2d dInit(box.x + a * taught_.grasp.u - b * taught_.grasp.v + A.at<double>(0, 2),  // d_init: the grasp
+                            box.y + b * taught_.grasp.u + a * taught_.grasp.v + A.at<double>(1, 2));  // point through it
 
     // Eq. (6): S_max over theta_init +- r, d_init +- l, coarse to fine (a full-resolution
     // exhaustive grid would cost ~1e9 samples per part).
     const double r = p_.rDeg, l = l_;
-    Pose best = searchGrid<false>(coarseGrad_, coarse_, init, r, 1.0, l, 2.0, init, r, l);
-    best = searchGrid<true>(fineGrad_, pts_, best, 1.5, 0.25, 2.0, 0.5, init, r, l);
-    best = searchGrid<true>(fineGrad_, pts_, best, 0.3, 0.05, 0.5, 0.1, init, r, l);
+    Pose init;
+    init.theta = thetaInit;
+    init.d.assign(groups_.size(), dInit);
+    Pose best = searchGrid<false>(coarseGrad_, coarse_, coarseWeight_, init, r, 1.0, l, 2.0, thetaInit, dInit, r, l);
+    best = searchGrid<true>(fineGrad_, groups_, weight_, best, 1.5, 0.25, 2.0, 0.5, thetaInit, dInit, r, l);
+    best = searchGrid<true>(fineGrad_, groups_, weight_, best, 0.3, 0.05, 0.5, 0.1, thetaInit, dInit, r, l);
     const double score = std::clamp(best.score, 0.0, 1.0);
     if (!(score > taught_.minScore)) return false;  // eq. (7): S_max > sigma
-    d.u = best.u;
-    d.v = best.v;
+    d.u = best.d[graspGroup_].x;
+    d.v = best.d[graspGroup_].y;
     d.angleDeg = detail::normaliseDeg(best.theta);
     d.score = score;
     d.areaPx = cv::contourArea(contours[static_cast<size_t>(which)]);
@@ -285,7 +328,9 @@ class ContourWeightedLocator final : public Locator {
   TaughtTemplate taught_;
   CwParams p_;
   Features tmpl_;
-  std::vector<ContourPoint> pts_, coarse_;
+  std::vector<std::vector<ContourPoint>> groups_, coarse_;
+  size_t graspGroup_;
+  double weight_ = 1, coarseWeight_ = 1;
   double partArea_;
   double l_;
   cv::Mat coarseGrad_, fineGrad_;  // scratch, per image
@@ -332,6 +377,7 @@ Result<std::unique_ptr<Locator>> makeContourWeightedLocator(const cv::Mat& templ
   p.autoRegions = r.integer("auto_regions", p.autoRegions, 1, 16);
   p.rDeg = r.number("r_deg", p.rDeg, 0.1, 45);
   p.lFraction = r.number("l_fraction", p.lFraction, 0.01, 1);
+  p.perHeightShift = r.flag("per_height_shift", p.perHeightShift);
   if (auto ok = r.finish(); !ok) return std::unexpected(ok.error());
   if (p.edgeHigh < p.edgeLow) return fail(Status::BadArgument, name + ": parameter 'edge_high' must not be below 'edge_low'");
 
@@ -386,12 +432,22 @@ Result<std::unique_ptr<Locator>> makeContourWeightedLocator(const cv::Mat& templ
         return fail(Status::BadArgument, fmt::format("{}: region {} height factor {} is not in [0, 1]", name, j + 1, reg.heightFactor));
       epsilon.push_back(reg.heightFactor);
     }
+    // Regions nest (a boss's top face lies inside the base plate's): a point belongs to the
+    // smallest polygon it lies in or within kRegionEdgePx of (its own edge pixels straddle
+    // the polygon's boundary).
+    constexpr double kRegionEdgePx = 2.5;
+    std::vector<std::vector<cv::Point2f>> polys;
+    std::vector<double> areas;
+    for (const auto& reg : taught.regions) {
+      polys.emplace_back();
+      for (const auto& q : reg.polygon) polys.back().emplace_back(static_cast<float>(q.u), static_cast<float>(q.v));
+      areas.push_back(std::abs(cv::contourArea(polys.back())));
+    }
     for (size_t k = 0; k < pts.size(); ++k)
-      for (size_t j = 0; j < taught.regions.size() && region[k] < 0; ++j) {
-        std::vector<cv::Point2f> poly;
-        for (const auto& q : taught.regions[j].polygon) poly.emplace_back(static_cast<float>(q.u), static_cast<float>(q.v));
-        if (cv::pointPolygonTest(poly, cv::Point2f(pts[k]), false) >= 0) region[k] = static_cast<int>(j);
-      }
+      for (size_t j = 0; j < polys.size(); ++j)
+        if (cv::pointPolygonTest(polys[j], cv::Point2f(pts[k]), true) >= -kRegionEdgePx &&
+            (region[k] < 0 || areas[j] < areas[static_cast<size_t>(region[k])]))
+          region[k] = static_cast<int>(j);
   } else {
     const int K = std::min<int>(p.autoRegions, static_cast<int>(pts.size()));
     cv::Mat data(static_cast<int>(pts.size()), 2, CV_32F);
@@ -440,19 +496,48 @@ Result<std::unique_ptr<Locator>> makeContourWeightedLocator(const cv::Mat& templ
       wsum += w[j];
     }
   if (!(wsum > 0)) return fail(Status::BadArgument, name + ": every contour region has weight 0 (height factors, or no contour inside the regions)");
-  std::vector<ContourPoint> model;
+  // Height groups (see searchGrid): regions of one height share a translation; without
+  // per_height_shift, or without taught regions (heights unknown), there is one group.
+  std::vector<double> regionHeight(m, 0.0);
+  if (!taught.regions.empty())
+    for (size_t j = 0; j < m; ++j) regionHeight[j] = taught.regions[j].heightMm;
+  std::vector<double> heights;
+  std::vector<size_t> groupOf(m, 0);
+  for (size_t j = 0; j < m; ++j) {
+    if (!p.perHeightShift || n[j] == 0 || w[j] <= 0) continue;
+    auto it = std::find_if(heights.begin(), heights.end(), [&](double h) { return std::abs(h - regionHeight[j]) < 1e-6; });
+    groupOf[j] = static_cast<size_t>(it - heights.begin());
+    if (it == heights.end()) heights.push_back(regionHeight[j]);
+  }
+  const size_t groupCount = std::max<size_t>(1, heights.size());
+  // The grasp point's group: that of the region with the largest height factor (the grasp
+  // height, eq. 4's epsilon = 1), the heavier group on a tie.
+  std::vector<double> groupWeight(groupCount, 0.0), groupEps(groupCount, -1.0);
+  for (size_t j = 0; j < m; ++j)
+    if (n[j] > 0 && w[j] > 0) {
+      groupWeight[groupOf[j]] += w[j];
+      groupEps[groupOf[j]] = std::max(groupEps[groupOf[j]], epsilon[j]);
+    }
+  size_t graspGroup = 0;
+  for (size_t g = 1; g < groupCount; ++g)
+    if (groupEps[g] > groupEps[graspGroup] || (groupEps[g] == groupEps[graspGroup] && groupWeight[g] > groupWeight[graspGroup]))
+      graspGroup = g;
+
+  std::vector<std::vector<ContourPoint>> groups(groupCount);
+  size_t modelPoints = 0;
   for (size_t k = 0; k < pts.size(); ++k) {
     if (region[k] < 0) continue;
     const size_t j = static_cast<size_t>(region[k]);
     if (w[j] <= 0) continue;
     const float tx = gx.at<float>(pts[k]), ty = gy.at<float>(pts[k]);
     const float mag = std::hypot(tx, ty);
-    model.push_back({cv::Point2f(static_cast<float>(pts[k].x - taught.grasp.u), static_cast<float>(pts[k].y - taught.grasp.v)),
-                     cv::Point2f(tx / mag, ty / mag), static_cast<float>(w[j] / wsum / n[j])});
+    groups[groupOf[j]].push_back({cv::Point2f(static_cast<float>(pts[k].x - taught.grasp.u), static_cast<float>(pts[k].y - taught.grasp.v)),
+                                  cv::Point2f(tx / mag, ty / mag), static_cast<float>(w[j] / wsum / n[j])});
+    ++modelPoints;
   }
-  if (model.size() < 20) return fail(Status::BadArgument, name + ": fewer than 20 weighted contour points in the template");
-  return std::make_unique<ContourWeightedLocator>(taught, std::move(p), std::move(tmpl), std::move(model), partArea,
-                                                  static_cast<double>(circumRadius));
+  if (modelPoints < 20) return fail(Status::BadArgument, name + ": fewer than 20 weighted contour points in the template");
+  return std::make_unique<ContourWeightedLocator>(taught, std::move(p), std::move(tmpl), std::move(groups), graspGroup,
+                                                  partArea, static_cast<double>(circumRadius));
 }
 
 }  // namespace vgr::vision

@@ -95,6 +95,26 @@ std::vector<Match> matchBidirectional(const Features& tmpl, const Features& img,
   return out;
 }
 
+std::vector<Match> matchNearest(const Features& tmpl, const Features& img, const std::vector<char>& alive) {
+  std::vector<int> index;
+  for (size_t k = 0; k < img.keypoints.size(); ++k)
+    if (alive[k]) index.push_back(static_cast<int>(k));
+  if (index.size() < 2 || tmpl.descriptors.rows < 2) return {};
+  cv::Mat imgDesc(static_cast<int>(index.size()), img.descriptors.cols, img.descriptors.type());
+  for (size_t r = 0; r < index.size(); ++r) img.descriptors.row(index[r]).copyTo(imgDesc.row(static_cast<int>(r)));
+  const auto forward = flannNearest(tmpl.descriptors, imgDesc);
+  std::vector<Match> out;
+  for (size_t t = 0; t < forward.size(); ++t)
+    if (forward[t].first >= 0) out.push_back({static_cast<int>(t), index[static_cast<size_t>(forward[t].first)], forward[t].second});
+  std::stable_sort(out.begin(), out.end(), [](const Match& a, const Match& b) { return a.distance < b.distance; });
+  return out;
+}
+
+std::vector<Match> coarseMatches(const Features& tmpl, const Features& img, const std::vector<char>& alive,
+                                 const FeatureSearch& search) {
+  return search.symmetric ? matchBidirectional(tmpl, img, alive, search.mu, search.minDFloor) : matchNearest(tmpl, img, alive);
+}
+
 bool poseFromHomography(const cv::Matx33d& H, PixelPoint grasp, double maxScale, Detection& out) {
   const cv::Vec3d p = H * cv::Vec3d(grasp.u, grasp.v, 1.0);
   if (std::abs(p[2]) < 1e-9) return false;
@@ -137,9 +157,15 @@ Result<double> selfMatchInliers(const cv::Mat& templateGray, const Features& tmp
   cv::Mat turned;
   cv::warpAffine(templateGray, turned, R, cv::Size(static_cast<int>(std::ceil(box.width)), static_cast<int>(std::ceil(box.height))),
                  cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(fill));
-  const Features img = detectOrb(turned, cv::Mat(), orb.imageFeatures, orb);
+  // Sensor noise as on a typical live image (sigma 5 gray levels, fixed seed): the
+  // reference is what a good live image gives, not what a noise-free copy gives.
+  cv::Mat noise(turned.size(), CV_16S);
+  cv::RNG(0x5eed).fill(noise, cv::RNG::NORMAL, 0.0, 5.0);
+  cv::Mat noisy;
+  cv::add(turned, noise, noisy, cv::noArray(), CV_8U);
+  const Features img = detectOrb(noisy, cv::Mat(), orb.imageFeatures, orb);
   const std::vector<char> alive(img.keypoints.size(), 1);
-  const auto candidates = matchBidirectional(tmpl, img, alive, search.mu, search.minDFloor);
+  const auto candidates = coarseMatches(tmpl, img, alive, search);
   const auto found = candidates.size() >= 4 ? fit(candidates, tmpl, img) : std::nullopt;
   const double n = found ? static_cast<double>(found->accepted.size()) : 0.0;
   if (n < search.minInliers)
@@ -147,7 +173,7 @@ Result<double> selfMatchInliers(const cv::Mat& templateGray, const Features& tmp
                 fmt::format("{}: the template does not find itself turned by 30 degrees ({} matches accepted, {} needed): "
                             "too few ORB features (texture) in the template",
                             search.method, n, search.minInliers));
-  return n;
+  return 0.5 * n;
 }
 
 Result<LocateOutput> locateFeatureParts(const cv::Mat& gray, const TaughtTemplate& taught, const Features& tmpl,
@@ -160,6 +186,9 @@ Result<LocateOutput> locateFeatureParts(const cv::Mat& gray, const TaughtTemplat
   if (roi.empty()) return out;
   const Features img = detectOrb(gray(roi), cv::Mat(), orb.imageFeatures, orb);
   std::vector<char> alive(img.keypoints.size(), 1);
+  cv::Point2f hullCentre;
+  float hullRadius = 0;
+  if (!templateHull.empty()) cv::minEnclosingCircle(templateHull, hullCentre, hullRadius);
 
   struct Found {
     Detection d;
@@ -170,11 +199,18 @@ Result<LocateOutput> locateFeatureParts(const cv::Mat& gray, const TaughtTemplat
   const cv::Point2f offset(static_cast<float>(roi.x), static_cast<float>(roi.y));
   // Each round takes at least the accepted keypoints away, so this ends; a few extra rounds
   // allow for fits that are rejected (out of the angle range, too weak) before a real part.
-  for (int round = 0; round < taught.maxParts + 3 && static_cast<int>(found.size()) < taught.maxParts; ++round) {
-    const auto candidates = matchBidirectional(tmpl, img, alive, search.mu, search.minDFloor);
+  int misses = 0;  // rounds whose fit was too weak: after three in a row the image is done
+  for (int round = 0; round < 2 * taught.maxParts + 4 && static_cast<int>(found.size()) < taught.maxParts; ++round) {
+    const auto candidates = coarseMatches(tmpl, img, alive, search);
     if (static_cast<int>(candidates.size()) < std::max(4, search.minInliers)) break;
     const auto fitted = fit(candidates, tmpl, img);
-    if (!fitted || static_cast<int>(fitted->accepted.size()) < search.minInliers) break;
+    if (!fitted) break;
+    if (static_cast<int>(fitted->accepted.size()) < search.minInliers) {
+      if (fitted->consumed.empty() || ++misses >= 3) break;
+      for (int i : fitted->consumed) alive[static_cast<size_t>(i)] = 0;
+      continue;
+    }
+    misses = 0;
 
     // Take away the image keypoints of this part: inside the template outline through H
     // (grown by 4 px) and every accepted one.
@@ -190,6 +226,12 @@ Result<LocateOutput> locateFeatureParts(const cv::Mat& gray, const TaughtTemplat
     f.d.v += roi.y;
     f.d.score = std::clamp(static_cast<double>(fitted->accepted.size()) / search.fullScoreInliers, 0.0, 1.0);
     if (f.d.score < taught.minScore || f.d.angleDeg < taught.angleMinDeg || f.d.angleDeg > taught.angleMaxDeg) continue;
+    // A second fit on the same part (the rest of a part whose features at another height
+    // disagree with the first fit) is not another part.
+    const bool duplicate = std::any_of(found.begin(), found.end(), [&](const Found& o) {
+      return std::hypot(o.d.u - f.d.u, o.d.v - f.d.v) < 0.5 * hullRadius;
+    });
+    if (duplicate) continue;
     f.candidates = static_cast<int>(candidates.size());
     for (const Match& m : fitted->accepted) {
       const cv::Point2f tp = tmpl.keypoints[static_cast<size_t>(m.t)].pt;

@@ -19,6 +19,8 @@
 
 namespace vgr::vision::detail {
 
+struct FeatureSearch;
+
 // Angle in degrees mapped to (-180, 180].
 double normaliseDeg(double a);
 
@@ -33,7 +35,7 @@ struct OrbParams {
   int imageFeatures = 6000;     // [50, 50000] keypoints kept in the searched image
   double scaleFactor = 1.2;     // (1, 2] pyramid step
   int levels = 3;               // [1, 8] pyramid levels (parts are seen at one scale)
-  int fastThreshold = 12;       // [1, 100] FAST-9 gray-level difference (eps_d of paper 001 eq. 9)
+  int fastThreshold = 20;       // [1, 100] FAST-9 gray-level difference (eps_d of paper 001 eq. 9)
 };
 void readOrbParams(ParamReader& r, OrbParams& p);
 
@@ -59,6 +61,9 @@ struct Match {
 // Result sorted by distance, best first (the order PROSAC needs).
 std::vector<Match> matchBidirectional(const Features& tmpl, const Features& img, const std::vector<char>& alive,
                                       double mu, double minDFloor);
+// The plain alternative (FeatureSearch::symmetric = false): each template keypoint's FLANN
+// nearest neighbour among the free image keypoints, no distance gate, no symmetric check.
+std::vector<Match> matchNearest(const Features& tmpl, const Features& img, const std::vector<char>& alive);
 
 // Paper 001, eq. (15): the template's grasp point through the homography H (template px ->
 // image px), and the rotation of H at that point, counter-clockwise as displayed, in
@@ -71,6 +76,9 @@ bool poseFromHomography(const cv::Matx33d& H, PixelPoint grasp, double maxScale,
 struct PartFit {
   cv::Matx33d H;
   std::vector<Match> accepted;
+  // Image keypoints (indices) this fit used up even if it is rejected (e.g. PROSAC's inliers
+  // when ADK's cluster is too small), so the next round looks elsewhere.
+  std::vector<int> consumed;
 };
 // candidates index into tmpl's and img's keypoints.
 using FitFn = std::function<std::optional<PartFit>(const std::vector<Match>& candidates, const Features& tmpl,
@@ -83,19 +91,25 @@ struct FeatureSearch {
   int minInliers = 12;     // fewer accepted matches: not a part
   double maxScale = 1.25;  // see poseFromHomography
   double fullScoreInliers = 0;  // accepted matches that score 1 (set at teach time)
+  bool symmetric = true;   // paper 001's coarse stage; false = plain nearest neighbour template -> image
 };
 
-// The teach-time reference for the score: the method's own pipeline run on the template
-// against a copy of itself turned by 30 degrees. Errors name the method when the template
-// has too few features to find itself.
+// The one the search asks for.
+std::vector<Match> coarseMatches(const Features& tmpl, const Features& img, const std::vector<char>& alive,
+                                 const FeatureSearch& search);
+
+// The teach-time reference for the score: half the matches the method's own pipeline
+// accepts between the template and a copy of itself turned by 30 degrees with sensor noise
+// (sigma 5). Errors name the method when the template has too few features to find itself.
 Result<double> selfMatchInliers(const cv::Mat& templateGray, const Features& tmpl, const OrbParams& orb,
                                 const FeatureSearch& search, const FitFn& fit);
 
 // Several parts per image: detect ORB once in the search ROI, then repeat {match the
 // template against the image keypoints not yet taken, fit, accept} until maxParts parts
 // are found or the fit fails; after each fit the image keypoints inside the template's
-// outline (its keypoints' convex hull through H) are taken away. score = accepted matches /
-// fullScoreInliers, clipped to [0, 1]. LocateOutput::matches are the best part's accepted
+// outline (its keypoints' convex hull through H) are taken away; a fit whose grasp point lies
+// within half the outline's radius of an earlier part's is the same part again and dropped.
+// score = accepted matches / fullScoreInliers, clipped to [0, 1]. LocateOutput::matches are the best part's accepted
 // matches, candidateMatches the candidates that part was fitted from.
 Result<LocateOutput> locateFeatureParts(const cv::Mat& gray, const TaughtTemplate& taught, const Features& tmpl,
                                         const std::vector<cv::Point2f>& templateHull, const OrbParams& orb,

@@ -8,6 +8,7 @@
 #include <opencv2/core.hpp>
 
 #include "vision/locate/contour_weighted_locator.hpp"
+#include "vision/locate/hu_sift_locators.hpp"
 #include "vision/locate/moments_locator.hpp"
 #include "vision/locate/orb_adk_locator.hpp"
 #include "vision/locate/orb_homography_locator.hpp"
@@ -141,6 +142,8 @@ Result<std::unique_ptr<Locator>> makeLocator(std::string_view method, const cv::
     return fail(Status::BadArgument, fmt::format("{}: max_parts must be in [1, 64], got {}", method, taught.maxParts));
   // One line per method; keep the order of locatorMethods().
   if (method == "moments") return makeMoments(templateGray, taught);
+  if (method == "hu") return makeHuLocator(templateGray, taught);
+  if (method == "sift") return makeSiftLocator(templateGray, taught);
   if (method == "orb-ransac") return makeOrbRansacLocator(templateGray, taught);
   if (method == "orb-prosac") return makeOrbProsacLocator(templateGray, taught);
   if (method == "orb-adk") return makeOrbAdkLocator(templateGray, taught);
@@ -152,7 +155,7 @@ Result<std::unique_ptr<Locator>> makeLocator(std::string_view method, const cv::
 }
 
 const std::vector<std::string>& locatorMethods() {
-  static const std::vector<std::string> kMethods{"moments", "orb-ransac", "orb-prosac", "orb-adk", "contour-weighted", "shape"};
+  static const std::vector<std::string> kMethods{"moments", "hu", "sift", "orb-ransac", "orb-prosac", "orb-adk", "contour-weighted", "shape"};
   return kMethods;
 }
 

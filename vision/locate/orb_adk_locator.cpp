@@ -165,7 +165,9 @@ std::optional<PartFit> fitAdk(const std::vector<Match>& candidates, const Featur
     if (kept.size() > best.size()) best = std::move(kept);
     if (static_cast<int>(best.size()) >= minInliers && best.size() * 2 > set.size()) break;
   }
-  if (best.size() < 4) return std::nullopt;
+  std::vector<int> consumed;
+  for (const Match& m : set) consumed.push_back(m.i);
+  if (static_cast<int>(best.size()) < std::max(4, minInliers)) return PartFit{cv::Matx33d::eye(), std::move(best), std::move(consumed)};
   src.clear();
   dst.clear();
   for (const Match& m : best) {
@@ -176,7 +178,7 @@ std::optional<PartFit> fitAdk(const std::vector<Match>& candidates, const Featur
   // transformation matrix ... using these matching point pairs with higher precision".
   const cv::Mat H = cv::findHomography(src, dst, 0);
   if (H.empty()) return std::nullopt;
-  return PartFit{cv::Matx33d(H), std::move(best)};
+  return PartFit{cv::Matx33d(H), std::move(best), std::move(consumed)};
 }
 
 class OrbAdkLocator final : public Locator {

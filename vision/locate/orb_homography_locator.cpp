@@ -76,6 +76,7 @@ Result<std::unique_ptr<Locator>> make(const std::string& name, int robust, const
   search.minDFloor = r.number("min_distance_floor", search.minDFloor, 0, 64);
   search.minInliers = r.integer("min_inliers", search.minInliers, 4, 1000);
   search.maxScale = r.number("max_scale", search.maxScale, 1.01, 4);
+  search.symmetric = r.flag("symmetric_matching", search.symmetric);
   HomographyParams hp;
   hp.reprojThresholdPx = r.number("reproj_threshold_px", hp.reprojThresholdPx, 0.5, 20);
   hp.maxIters = r.integer("max_iters", hp.maxIters, 100, 100000);

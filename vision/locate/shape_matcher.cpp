@@ -5,9 +5,6 @@
 #include <map>
 #include <string>
 #include <numbers>
-#include <cstdio>
-#include <chrono>
-#include <cstdlib>
 
 #include <Eigen/Dense>
 #include <fmt/core.h>
@@ -108,10 +105,39 @@ class ShapeLocator final : public Locator {
     rx_.resize(maxPts), ry_.resize(maxPts), rnx_.resize(maxPts), rny_.resize(maxPts);
     ix_.resize(maxPts), iy_.resize(maxPts);
     workers_.resize(static_cast<std::size_t>(p_.workers));
-    if (std::getenv("VGR_SHAPE_DEBUG")) {
-      for (const auto& l : m_.levels) std::fprintf(stderr, "level: %d pts r=%.1f step=%.2fdeg\n", l.size(), l.radius, l.angleStep * 180 / M_PI);
-      std::fprintf(stderr, "top angles %zu\n", rotated_.size());
+    assignGraspRegion(taught);
+  }
+
+  // The grasp point's region: the smallest region polygon containing it (a boss on a plate
+  // lies inside the plate's outline too), else the nearest. Its model points are the level-0
+  // points within 3 px of or inside its polygon. Fewer than 12 points: no region settling.
+  void assignGraspRegion(const TaughtTemplate& taught) {
+    if (p_.regionShiftPx <= 0 || taught.regions.size() < 2) return;
+    int best = -1;
+    double bestArea = 0, bestDist = -1e18;
+    std::vector<std::vector<cv::Point2f>> polys;
+    for (const auto& r : taught.regions) {
+      std::vector<cv::Point2f> poly;
+      for (const auto& q : r.polygon) poly.emplace_back(static_cast<float>(q.u), static_cast<float>(q.v));
+      polys.push_back(poly);
     }
+    const cv::Point2f g(static_cast<float>(taught.grasp.u), static_cast<float>(taught.grasp.v));
+    for (std::size_t i = 0; i < polys.size(); ++i) {
+      if (polys[i].size() < 3) continue;
+      const double d = cv::pointPolygonTest(polys[i], g, true);
+      const double area = cv::contourArea(polys[i]);
+      const bool inside = d >= 0;
+      const bool bestInside = bestDist >= 0;
+      if (best < 0 || (inside && (!bestInside || area < bestArea)) || (!inside && !bestInside && d > bestDist))
+        best = static_cast<int>(i), bestArea = area, bestDist = d;
+    }
+    if (best < 0) return;
+    const LevelModel& m0 = m_.levels[0];
+    for (int k = 0; k < m0.size(); ++k) {
+      const cv::Point2f q(static_cast<float>(m0.x[k] + m_.origin.u), static_cast<float>(m0.y[k] + m_.origin.v));
+      if (cv::pointPolygonTest(polys[best], q, true) >= -3.0) graspRegionPts_.push_back(k);
+    }
+    if (graspRegionPts_.size() < 12 || graspRegionPts_.size() == static_cast<std::size_t>(m0.size())) graspRegionPts_.clear();
   }
 
   std::string_view method() const override { return "shape"; }
@@ -128,12 +154,14 @@ class ShapeLocator final : public Locator {
   void prepare(cv::Size roiSize);
   void searchTop(Worker& w, int first, int stride, double thr);
   void levelGradients(int level, const Candidate& c, double extra);
+  void smoothGradients(const Candidate& c);
   double scoreAt(int level, int x, int y, int& sign) const;
   void rotateModel(int level, double phi);
   bool trackDown(int level, Candidate& c, double thr);
   void interpolatePeak(Candidate& c);
   void refine(Candidate& c);
   void suppress(std::vector<Candidate>& cands, double distPx, double angle, std::size_t keep) const;
+  void settleGraspRegion(const Candidate& c, double& tx, double& ty);
 
   ShapeParams p_;
   Model m_;
@@ -157,6 +185,8 @@ class ShapeLocator final : public Locator {
   std::vector<float> rx_, ry_, rnx_, rny_;
   std::vector<int> ix_, iy_;
   int rotatedCount_ = 0;
+  // Height-aware grasp: indices of the level-0 model points on the grasp point's region.
+  std::vector<int> graspRegionPts_;
 };
 
 void ShapeLocator::prepare(cv::Size roiSize) {
@@ -302,15 +332,20 @@ void ShapeLocator::levelGradients(int level, const Candidate& c, double extra) {
     }
   }
   (void)inner;
-  if (level == 0 && p_.refine) {
-    // Smoothed gradient for the sub-pixel edge positions (sigma 1 px, like the model's).
-    const cv::Rect wide = cv::Rect(win.x - 4, win.y - 4, win.width + 8, win.height + 8) & full;
-    cv::Mat f = f32_(wide), b = blur_(wide), sx = sgx_(wide), sy = sgy_(wide);
-    img(wide).convertTo(f, CV_32F);
-    cv::GaussianBlur(f, b, cv::Size(7, 7), 1.0, 1.0, kBorderFlags);
-    cv::Sobel(b, sx, CV_32F, 1, 0, 3, 1.0 / 8, 0, kBorderFlags);
-    cv::Sobel(b, sy, CV_32F, 0, 1, 3, 1.0 / 8, 0, kBorderFlags);
-  }
+}
+
+// The smoothed level-0 gradient around c for the refinement (sigma 1 px, like the model's).
+void ShapeLocator::smoothGradients(const Candidate& c) {
+  const cv::Mat& img = pyr_[0];
+  const int r = static_cast<int>(std::ceil(m_.levels[0].radius + (graspRegionPts_.empty() ? 0 : p_.regionShiftPx))) + 8;
+  const cv::Rect full(0, 0, img.cols, img.rows);
+  const cv::Rect wide = cv::Rect(cvRound(c.x) - r, cvRound(c.y) - r, 2 * r + 1, 2 * r + 1) & full;
+  if (wide.empty()) return;
+  cv::Mat f = f32_(wide), b = blur_(wide), sx = sgx_(wide), sy = sgy_(wide);
+  img(wide).convertTo(f, CV_32F);
+  cv::GaussianBlur(f, b, cv::Size(7, 7), 1.0, 1.0, kBorderFlags);
+  cv::Sobel(b, sx, CV_32F, 1, 0, 3, 1.0 / 8, 0, kBorderFlags);
+  cv::Sobel(b, sy, CV_32F, 0, 1, 3, 1.0 / 8, 0, kBorderFlags);
 }
 
 void ShapeLocator::rotateModel(int level, double phi) {
@@ -353,7 +388,7 @@ bool ShapeLocator::trackDown(int level, Candidate& c, double thr) {
   const int kAngles = std::max(1, static_cast<int>(std::ceil(coarseStep / lm.angleStep)));
   Candidate best = c;
   best.x = 2 * c.x, best.y = 2 * c.y, best.score = -2;
-  levelGradients(level, best, level == 0 ? 3.0 : 0.0);
+  levelGradients(level, best, level > 0 ? 0.0 : graspRegionPts_.empty() ? 3.0 : 3.0 + p_.regionShiftPx);
   const int x0 = cvRound(best.x), y0 = cvRound(best.y);
   for (int ka = -kAngles; ka <= kAngles; ++ka) {
     const double phi = c.phi + ka * lm.angleStep;
@@ -453,6 +488,74 @@ void ShapeLocator::refine(Candidate& c) {
   }
 }
 
+// Height-aware grasp (paper 000's projection difference, Sec. I): a raised region of the part
+// shows shifted radially against the base by up to tens of px, so after the rigid fit the
+// grasp point's region looks for its own translation, rotation shared: an exhaustive search
+// of its gradient-direction score over +-regionShiftPx (2 px steps, then 1 px), then least
+// squares on its point-to-tangent distances for (tx, ty) only. (tx, ty): the model origin's
+// position for that region, px of level 0; unchanged when the region is not found.
+void ShapeLocator::settleGraspRegion(const Candidate& c, double& tx, double& ty) {
+  tx = c.x, ty = c.y;
+  if (graspRegionPts_.empty()) return;
+  rotateModel(0, c.phi);
+  const cv::Mat& u = nx_[0];
+  const cv::Mat& v = ny_[0];
+  const int n = static_cast<int>(graspRegionPts_.size());
+  auto score = [&](int dx, int dy) {
+    double sum = 0;
+    for (const int k : graspRegionPts_) {
+      const int xx = cvRound(c.x) + dx + ix_[k], yy = cvRound(c.y) + dy + iy_[k];
+      if (xx < 0 || yy < 0 || xx >= u.cols || yy >= u.rows) continue;
+      const float d = rnx_[k] * u.ptr<float>(yy)[xx] + rny_[k] * v.ptr<float>(yy)[xx];
+      sum += p_.polarity == ShapePolarity::IgnoreLocal ? std::abs(d) : c.sign * d;
+    }
+    return sum / n;
+  };
+  const int range = static_cast<int>(std::ceil(p_.regionShiftPx));
+  double best = -2;
+  int bx = 0, by = 0;
+  for (int dy = -range; dy <= range; dy += 2)
+    for (int dx = -range; dx <= range; dx += 2)
+      if (const double s = score(dx, dy); s > best) best = s, bx = dx, by = dy;
+  const int cx = bx, cy = by;
+  for (int dy = -1; dy <= 1; ++dy)
+    for (int dx = -1; dx <= 1; ++dx)
+      if (const double s = score(cx + dx, cy + dy); s > best) best = s, bx = cx + dx, by = cy + dy;
+  if (best < taught_.minScore) return;  // the region is not there: keep the rigid pose
+  // Where the rigid pose fits the region about as well, stay: a shifted look-alike (a second
+  // hole, a straight edge slid along itself) must be clearly better to win.
+  if (score(0, 0) >= best - 0.05) bx = 0, by = 0;
+  double x = cvRound(c.x) + bx, y = cvRound(c.y) + by;
+  double tukey = 2.0;
+  for (int it = 0; it < 6; ++it) {
+    Eigen::Matrix2d a = Eigen::Matrix2d::Zero();
+    Eigen::Vector2d b = Eigen::Vector2d::Zero();
+    int used = 0;
+    for (const int k : graspRegionPts_) {
+      double t = 0, mag = 0;
+      if (!shape::edgeAlongNormal(sgx_, sgy_, x + rx_[k], y + ry_[k], rnx_[k], rny_[k], 2.0, c.sign,
+                                  p_.polarity == ShapePolarity::IgnoreLocal, p_.minContrast, t, mag) ||
+          std::abs(t) >= tukey)
+        continue;
+      const double q = t / tukey;
+      const double w = (1 - q * q) * (1 - q * q);
+      const Eigen::Vector2d j(rnx_[k], rny_[k]);
+      a += w * j * j.transpose();
+      b += w * j * t;
+      ++used;
+    }
+    if (used < 8) break;
+    // A straight region pins only its normal direction: a small ridge keeps the other one.
+    a += 1e-3 * a.trace() * Eigen::Matrix2d::Identity();
+    const Eigen::Vector2d d = a.ldlt().solve(b);
+    if (!d.allFinite()) break;
+    x += d(0), y += d(1);
+    tukey = 1.0;
+    if (d.norm() < 1e-4) break;
+  }
+  tx = x, ty = y;
+}
+
 // Greedy non-maximum suppression: a candidate within distPx and angle of a better one goes.
 void ShapeLocator::suppress(std::vector<Candidate>& cands, double distPx, double angle, std::size_t keep) const {
   std::sort(cands.begin(), cands.end(), [](const Candidate& l, const Candidate& r) { return l.score > r.score; });
@@ -478,18 +581,9 @@ Result<LocateOutput> ShapeLocator::locate(const cv::Mat& gray) {
   if (roi.width < 2 * minSide || roi.height < 2 * minSide) return out;
   prepare(roi.size());
 
-  const bool dbg = std::getenv("VGR_SHAPE_DEBUG") != nullptr;
-  auto tick = std::chrono::steady_clock::now();
-  auto mark = [&](const char* what) {
-    if (!dbg) return;
-    const auto now = std::chrono::steady_clock::now();
-    std::fprintf(stderr, "  %s %.2f ms\n", what, std::chrono::duration<double, std::milli>(now - tick).count());
-    tick = now;
-  };
   pyr_[0] = gray(roi);
   for (int l = 1; l <= top; ++l) cv::pyrDown(pyr_[l - 1], pyr_[l], pyr_[l].size(), cv::BORDER_REPLICATE);
 
-  mark("pyramid");
   // Top level: full gradient, unit directions into the zero-padded planes.
   {
     cv::Sobel(pyr_[top], gx_[top], CV_32F, 1, 0, 3, 1.0 / 8, 0, cv::BORDER_REPLICATE);
@@ -510,7 +604,6 @@ Result<LocateOutput> ShapeLocator::locate(const cv::Mat& gray) {
       }
     }
   }
-  mark("top gradient");
   const double minScore = taught_.minScore;
   const double coarseThr = minScore * kCoarseSlack;
   const int nw = static_cast<int>(workers_.size());
@@ -521,8 +614,6 @@ Result<LocateOutput> ShapeLocator::locate(const cv::Mat& gray) {
   cands_.clear();
   for (const Worker& w : workers_) cands_.insert(cands_.end(), w.found.begin(), w.found.end());
   const std::size_t keep = static_cast<std::size_t>(4 * taught_.maxParts + 4);
-  mark("top search");
-  if (dbg) std::fprintf(stderr, "top candidates %zu\n", cands_.size());
   suppress(cands_, 1.5, 1.5 * topStep_, keep);
 
   for (int l = top - 1; l >= 0; --l) {
@@ -531,47 +622,43 @@ Result<LocateOutput> ShapeLocator::locate(const cv::Mat& gray) {
       if (trackDown(l, c, l == 0 ? minScore : coarseThr)) next_.push_back(c);
     suppress(next_, 2.0, 2.5 * m_.levels[l].angleStep, keep);
     cands_.swap(next_);
-    mark("level");
   }
 
-  // Full resolution: sub-pixel pose for each survivor, then overlap control.
+  // Full resolution, best first: overlap control, then the sub-pixel pose, until maxParts.
+  // Only parts that make the output pay for the refinement.
+  std::sort(cands_.begin(), cands_.end(), [](const Candidate& l, const Candidate& r) { return l.score > r.score; });
   next_.clear();
-  for (Candidate c : cands_) {
-    if (top == 0) {
-      // Single level: no tracking happened; gradients and the peak come from here.
-      levelGradients(0, c, 3.0);
-    } else {
-      levelGradients(0, c, 3.0);
-    }
-    interpolatePeak(c);
-    if (p_.refine) refine(c);
-    if (c.score >= minScore) next_.push_back(c);
-  }
-  mark("subpixel");
-  std::sort(next_.begin(), next_.end(), [](const Candidate& l, const Candidate& r) { return l.score > r.score; });
-  std::vector<Detection>& parts = out.parts;
-  std::vector<Candidate> kept;
-  for (const Candidate& c : next_) {
-    bool overlaps = false;
-    for (const Candidate& k : kept) {
+  const double tol = m_.levels[0].angleStep * 180 / std::numbers::pi;
+  auto overlapsKept = [&](const Candidate& c) {
+    for (const Candidate& k : next_) {
       const double q = std::hypot(c.x - k.x, c.y - k.y) / (2 * eqRadius_);
       const double f = q < 1 ? 2 / std::numbers::pi * (std::acos(q) - q * std::sqrt(1 - q * q)) : 0.0;
-      if (f > p_.maxOverlap) overlaps = true;
+      if (f > p_.maxOverlap) return true;
     }
-    if (overlaps) continue;
+    return false;
+  };
+  for (Candidate c : cands_) {
+    if (static_cast<int>(next_.size()) >= taught_.maxParts) break;
+    if (overlapsKept(c)) continue;
+    interpolatePeak(c);
+    if (p_.refine) {
+      smoothGradients(c);
+      refine(c);
+    }
+    double tx = c.x, ty = c.y;
+    if (p_.refine) settleGraspRegion(c, tx, ty);
+    if (c.score < minScore || overlapsKept(c)) continue;
     const double angleDeg = normaliseDeg(-c.phi * 180 / std::numbers::pi);
-    const double tol = m_.levels[0].angleStep * 180 / std::numbers::pi;
     if (!fullCircle_ && (angleDeg < taught_.angleMinDeg - tol || angleDeg > taught_.angleMaxDeg + tol)) continue;
-    kept.push_back(c);
+    next_.push_back(c);
     const double cs = std::cos(c.phi), sn = std::sin(c.phi);
     const double gx = taught_.grasp.u - m_.origin.u, gy = taught_.grasp.v - m_.origin.v;
     Detection d;
-    d.u = roi.x + c.x + cs * gx - sn * gy;
-    d.v = roi.y + c.y + sn * gx + cs * gy;
+    d.u = roi.x + tx + cs * gx - sn * gy;
+    d.v = roi.y + ty + sn * gx + cs * gy;
     d.angleDeg = angleDeg;
     d.score = c.score;
-    parts.push_back(d);
-    if (static_cast<int>(parts.size()) >= taught_.maxParts) break;
+    out.parts.push_back(d);
   }
   return out;
 }
@@ -593,6 +680,7 @@ Result<ShapeParams> parseShapeParams(const TaughtTemplate& taught) {
   p.maxOverlap = r.number("max_overlap", p.maxOverlap, 0, 1);
   p.refine = r.flag("refine", p.refine);
   p.workers = r.integer("workers", p.workers, 1, 16);
+  p.regionShiftPx = r.number("region_shift_px", p.regionShiftPx, 0, 200);
   if (auto ok = r.finish(); !ok) return std::unexpected(ok.error());
   if (const auto it = taught.params.find("polarity"); it != taught.params.end()) {
     if (it->second == "use") {

@@ -42,6 +42,10 @@ struct ShapeParams {
   ShapePolarity polarity = ShapePolarity::Use;  // "polarity": use | ignore_global | ignore_local
   bool refine = true;           // least-squares refinement (else: peak interpolation only)
   int workers = 2;              // [1, 16]: stripes of the top-level search
+  // Height-aware grasp (TaughtTemplate::regions, >= 2 of them): after the rigid fit the region
+  // the grasp point lies on settles with its own translation within +-regionShiftPx under the
+  // shared rotation, and the grasp point follows that region. 0 = off (one rigid pose).
+  double regionShiftPx = 96;    // px, [0, 200]
 };
 
 // Parses and range-checks TaughtTemplate::params for "shape"; errors name the parameter.

@@ -1,0 +1,134 @@
+// The localization tools as users run them: `vgr sim render` -> `vgr teach` -> `vgr locate
+// --json` and `vgr eval --json`, checked against the dataset's truth.csv; bad input gets a
+// clear error and exit code 2.
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Run {
+  int exitCode = -1;
+  std::string out;
+};
+
+Run vgr(const std::string& args) {
+  Run r;
+  FILE* p = ::popen((std::string(VGR_BIN_DIR) + "/vgr " + args + " 2>&1").c_str(), "r");
+  if (p == nullptr) return r;
+  std::array<char, 4096> buf{};
+  for (std::size_t n; (n = std::fread(buf.data(), 1, buf.size(), p)) > 0;) r.out.append(buf.data(), n);
+  const int st = ::pclose(p);
+  r.exitCode = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  return r;
+}
+
+std::string lastLine(const std::string& s) {
+  std::istringstream in(s);
+  std::string last;
+  for (std::string l; std::getline(in, l);)
+    if (!l.empty()) last = l;
+  return last;
+}
+
+class locate_cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("vgr-locate-cli-" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    std::error_code ec;
+    if (!HasFailure()) fs::remove_all(dir_, ec);
+  }
+  fs::path dir_;
+};
+
+TEST_F(locate_cli, RenderTeachLocateEval) {
+  const std::string data = (dir_ / "data").string(), job = (dir_ / "job").string();
+  auto r = vgr("sim render --out " + data + " --count 6 --seed 4 --part flat --parts 2 --empty-ratio 0.3 --noise 3 "
+               "--angle-range 180 --width 640 --height 512 --focal 1000");
+  ASSERT_EQ(r.exitCode, 0) << r.out;
+  const auto summary = nlohmann::json::parse(lastLine(r.out));
+  ASSERT_GT(summary["empty_images"].get<int>(), 0);
+
+  // The grasp point from template.yaml, as a user would copy it.
+  std::ifstream ty(dir_ / "data" / "template.yaml");
+  std::string line, grasp;
+  while (std::getline(ty, line))
+    if (line.rfind("# Teach a job on it:", 0) == 0) grasp = line.substr(line.find("--grasp ") + 8, line.find(" --regions") - line.find("--grasp ") - 8);
+  ASSERT_FALSE(grasp.empty());
+  r = vgr("teach --image " + data + "/template.png --grasp " + grasp + " --regions " + data + "/template.yaml --method hu --max-parts 4 --out " + job);
+  ASSERT_EQ(r.exitCode, 0) << r.out;
+  ASSERT_TRUE(fs::exists(dir_ / "job" / "job.yaml"));
+  ASSERT_TRUE(fs::exists(dir_ / "job" / "template.png"));
+
+  // vgr locate on every image: status and parts against truth.csv.
+  std::map<std::string, std::vector<std::array<double, 3>>> truth;
+  std::ifstream tc(dir_ / "data" / "truth.csv");
+  std::getline(tc, line);
+  while (std::getline(tc, line)) {
+    std::vector<std::string> f;
+    std::stringstream ss(line);
+    for (std::string c; std::getline(ss, c, ',');) f.push_back(c);
+    auto& v = truth[f[0]];
+    if (f.size() > 1 && !f[1].empty()) v.push_back({std::stod(f[1]), std::stod(f[2]), std::stod(f[3])});
+  }
+  ASSERT_EQ(truth.size(), 6u);
+  for (const auto& [image, parts] : truth) {
+    r = vgr("locate --job " + job + " --image " + data + "/" + image + " --json");
+    ASSERT_EQ(r.exitCode, 0) << r.out;
+    const auto j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j["status"].get<int>(), parts.empty() ? 1 : 0) << image;
+    ASSERT_EQ(j["parts"].size(), parts.size()) << image << ": " << r.out;
+    EXPECT_GE(j["time_ms"].get<double>(), 0);
+    for (const auto& t : parts) {
+      double best = 1e9;
+      for (const auto& p : j["parts"]) best = std::min(best, std::hypot(p["x_px"].get<double>() - t[0], p["y_px"].get<double>() - t[1]));
+      EXPECT_LT(best, 1.0) << image;  // hu on a flat part: 0.36 px max over 100 images (docs/localization.md)
+    }
+  }
+
+  r = vgr("eval --job " + job + " --dataset " + data + " --plot " + (dir_ / "err.png").string() + " --json");
+  ASSERT_EQ(r.exitCode, 0) << r.out;
+  const auto e = nlohmann::json::parse(lastLine(r.out));
+  EXPECT_DOUBLE_EQ(e["success_rate"].get<double>(), 1.0) << r.out;
+  EXPECT_EQ(e["method"], "hu");
+  EXPECT_TRUE(fs::exists(dir_ / "err.png"));
+  // --method overrides the job's.
+  r = vgr("eval --job " + job + " --dataset " + data + " --method moments --json");
+  ASSERT_EQ(r.exitCode, 0) << r.out;
+  EXPECT_EQ(nlohmann::json::parse(lastLine(r.out))["method"], "moments");
+}
+
+TEST_F(locate_cli, BadInputIsNamed) {
+  auto r = vgr("teach --image /nonexistent.png --grasp 1,2 --out " + (dir_ / "j").string());
+  EXPECT_EQ(r.exitCode, 2);
+  EXPECT_NE(r.out.find("/nonexistent.png: cannot read the image"), std::string::npos) << r.out;
+  r = vgr("sim render --out " + (dir_ / "d").string() + " --count 1 --width 320 --height 256 --focal 500");
+  ASSERT_EQ(r.exitCode, 0) << r.out;
+  r = vgr("teach --image " + (dir_ / "d" / "template.png").string() + " --grasp '1;2' --out " + (dir_ / "j").string());
+  EXPECT_EQ(r.exitCode, 2);
+  EXPECT_NE(r.out.find("--grasp: expected X,Y in template px, got '1;2'"), std::string::npos) << r.out;
+  r = vgr("teach --image " + (dir_ / "d" / "template.png").string() + " --grasp 1,2 --method sift --param ratio=7 --out " + (dir_ / "j").string());
+  EXPECT_EQ(r.exitCode, 2);
+  EXPECT_NE(r.out.find("sift: parameter 'ratio'"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(dir_ / "j" / "job.yaml"));  // nothing written for a job that cannot be built
+  r = vgr("locate --job " + (dir_ / "nojob").string() + " --image x.png --json");
+  EXPECT_EQ(r.exitCode, 2);
+  EXPECT_NE(r.out.find("nojob/job.yaml: cannot open the job file"), std::string::npos) << r.out;
+}
+
+}  // namespace
