@@ -351,6 +351,19 @@ void parseJob(Section s, JobConfig& j) {
   s.finish();
 }
 
+void parseCalibration(Section s, CalibrationFilesConfig& c, const YAML::Node& node, const std::string& file) {
+  if (!node || node.IsNull()) return;
+  c.enabled = true;
+  const std::string dir = std::filesystem::path(file).parent_path().string();
+  for (auto [key, out] : {std::pair{"intrinsics", &c.intrinsics}, std::pair{"handeye", &c.handeye}, std::pair{"plane", &c.plane}}) {
+    s.require(key);
+    s.read<std::string>(key, *out);
+    if (out->empty()) s.fail(s.get(key), key, "expected a file path");
+    if (std::filesystem::path(*out).is_relative() && !dir.empty()) *out = (std::filesystem::path(dir) / *out).string();
+  }
+  s.finish();
+}
+
 void parseSim(Section s, SimConfig& c) {
   int seed = static_cast<int>(c.seed);
   s.read<int>("seed", seed, inRange(0, std::numeric_limits<int>::max()), ">= 0");
@@ -414,6 +427,10 @@ CellConfig parse(const YAML::Node& root, const std::string& file) {
   }
 
   parseSim(Section(file, top.get("sim"), "sim"), c.sim);
+  {
+    const YAML::Node cal = top.get("calibration");
+    parseCalibration(Section(file, cal, "calibration"), c.calibration, cal, file);
+  }
   top.finish();
   return c;
 }

@@ -154,6 +154,16 @@ struct SimConfig {
   std::string serial = "VGR-SIM-0";
 };
 
+// Calibration files (docs/calibration.md) vgrd maps pixels with instead of `model`. Paths
+// relative to the config file's folder; all three set, or the section absent. A job whose
+// calibration is missing or inconsistent gets -6 NOT_CALIBRATED.
+struct CalibrationFilesConfig {
+  bool enabled = false;    // true when the section is present
+  std::string intrinsics;  // intrinsics.yaml (vgr calibrate intrinsics)
+  std::string handeye;     // handeye.yaml, eye-to-hand (vgr calibrate handeye)
+  std::string plane;       // plane.yaml (vgr calibrate plane)
+};
+
 struct CellConfig {
   std::string sourcePath;           // file it was loaded from
   std::string name = "cell";
@@ -166,6 +176,7 @@ struct CellConfig {
   std::vector<RobotConfig> robots;
   std::vector<JobConfig> jobs;
   SimConfig sim;
+  CalibrationFilesConfig calibration;  // optional section `calibration`
 
   const JobConfig* findJob(int id) const;
 };

@@ -7,14 +7,17 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include <fmt/core.h>
 #include <nlohmann/json.hpp>
+#include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "sim/calib_scene.hpp"
 #include "vision/calib/handeye.hpp"
 #include "vision/calib/intrinsics.hpp"
+#include "vision/calib/mapping.hpp"
 #include "vision/calib/se3.hpp"
 
 namespace vgr::daemon {
@@ -204,6 +207,62 @@ int runCalibrateHandEye(const CalibHandEyeOptions& o) {
   return 0;
 }
 
+int runCalibratePlane(const CalibPlaneOptions& o) {
+  calib::WorkPlane plane;
+  std::string source;
+  if (!o.points.empty() == !o.image.empty()) return bad("give either --image (a plate on the conveyor) or --points FILE");
+  if (!o.points.empty()) {
+    std::ifstream f(o.points);
+    if (!f) return bad(fmt::format("{}: cannot open", o.points));
+    std::vector<Vec3> pts;
+    std::string line;
+    for (int n = 1; std::getline(f, line); ++n) {
+      if (auto h = line.find('#'); h != std::string::npos) line.resize(h);
+      if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+      std::istringstream ls(line);
+      Vec3 p;
+      std::string extra;
+      if (!(ls >> p.x >> p.y >> p.z) || (ls >> extra))
+        return bad(fmt::format("{}:{}: expected 'x y z' in mm", o.points, n));
+      pts.push_back(p);
+    }
+    auto fit = calib::planeFromPoints(pts);
+    if (!fit) return bad(fmt::format("{}: {}", o.points, fit.error().message));
+    plane = *fit;
+    source = "points";
+    std::printf("plane through %zu touched points: fit rms %.3f mm\n", pts.size(), plane.fitRmsMm);
+  } else {
+    auto spec = patternSpec(o.pattern);
+    if (!spec) return bad(spec.error().message);
+    auto cam = calib::readIntrinsics(o.intrinsics);
+    if (!cam) return bad(cam.error().message);
+    auto he = calib::readHandEye(o.handeye);
+    if (!he) return bad(he.error().message);
+    if (he->config != calib::HandEyeConfig::EyeToHand)
+      return bad(fmt::format("{}: an eye-in-hand calibration needs the snapshot pose; use --points", o.handeye));
+    const cv::Mat img = cv::imread(o.image, cv::IMREAD_GRAYSCALE);
+    if (img.empty()) return bad(fmt::format("{}: cannot read the image", o.image));
+    const auto d = calib::detectPattern(img, *spec, o.image);
+    if (!d.found) return bad(fmt::format("{}: the {} {}x{} was not found", o.image, o.pattern.pattern, o.pattern.cols, o.pattern.rows));
+    cv::Vec3d rv, tv;
+    cv::solvePnP(calib::patternObjectPoints(*spec), d.corners, cam->cameraMatrix, cam->dist, rv, tv);
+    plane = calib::planeFromPlate(he->x, se3::toPose(se3::fromRvecTvec(rv, tv)), o.thicknessMm);
+    source = "plate";
+    std::printf("plane from the plate in %s (thickness %.2f mm)\n", o.image.c_str(), o.thicknessMm);
+  }
+  std::printf("point %.3f %.3f %.3f mm, normal %.6f %.6f %.6f\n", plane.point.x, plane.point.y, plane.point.z,
+              plane.normal.x, plane.normal.y, plane.normal.z);
+  if (auto w = calib::writeWorkPlane(o.out, plane, source); !w) return bad(w.error().message);
+  std::printf("written: %s\n", o.out.c_str());
+  if (o.json) {
+    nlohmann::json j{{"point_mm", {plane.point.x, plane.point.y, plane.point.z}},
+                     {"normal", {plane.normal.x, plane.normal.y, plane.normal.z}},
+                     {"fit_rms_mm", plane.fitRmsMm}, {"source", source}, {"out", o.out}};
+    std::printf("%s\n", j.dump().c_str());
+  }
+  return 0;
+}
+
 int runCalibrateSynth(const CalibSynthOptions& o) {
   auto spec = patternSpec(o.pattern);
   if (!spec) return bad(spec.error().message);
@@ -260,6 +319,15 @@ int runCalibrateSynth(const CalibSynthOptions& o) {
     progress(i + 1, s.camFromPlate.size(), name, "rendered");
   }
   pf.close();
+  if (cfg == calib::HandEyeConfig::EyeToHand) {
+    // A plate lying face up on the conveyor (z = 0) for `vgr calibrate plane --image`.
+    const se3::Iso basePlate = Eigen::Translation3d(330, -60, 0) * Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitZ()) *
+                               Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX());
+    ro.seed = o.seed * 1000 + 999;
+    fs::create_directories(fs::path(o.out) / "plane");  // not in the hand-eye folder: it has no robot pose
+    cv::imwrite((fs::path(o.out) / "plane" / "conveyor_plate.png").string(),
+                sim::renderPlate(cam, *spec, se3::toPose(se3::toIso(s.x).inverse() * basePlate), ro));
+  }
   // truth.yaml in the handeye.yaml layout, so `vgr calibrate handeye --truth` can read it.
   try {
     cv::FileStorage f((fs::path(o.out) / "truth.yaml").string(), cv::FileStorage::WRITE);

@@ -33,6 +33,17 @@ struct CalibHandEyeOptions {
 };
 int runCalibrateHandEye(const CalibHandEyeOptions& o);
 
+struct CalibPlaneOptions {
+  std::string intrinsics, handeye;  // for --image: intrinsics.yaml and an eye-to-hand handeye.yaml
+  std::string image;                // (a) a plate lying on the conveyor
+  double thicknessMm = 0;           //     its thickness (the plane is moved down by it)
+  std::string points;               // (b) robot-touched points, "x y z" in mm per line
+  CalibPatternOptions pattern;
+  std::string out = "plane.yaml";
+  bool json = false;
+};
+int runCalibratePlane(const CalibPlaneOptions& o);
+
 struct CalibSynthOptions {
   std::string kind = "intrinsics";     // intrinsics | handeye
   std::string out;                     // folder (created)

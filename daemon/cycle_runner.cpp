@@ -42,7 +42,20 @@ const char* triggerSourceName(TriggerSource s) {
 }
 
 CycleRunner::CycleRunner(const config::CellConfig& cell, CameraWorker& camera, CycleSinks sinks)
-    : cell_(cell), camera_(camera), sinks_(std::move(sinks)), model_(modelFrom(cell.model)) {}
+    : cell_(cell), camera_(camera), sinks_(std::move(sinks)), model_(modelFrom(cell.model)) {
+  if (cell.calibration.enabled) {
+    auto m = vision::calib::loadCellCalibration(cell.calibration.intrinsics, cell.calibration.handeye,
+                                                cell.calibration.plane);
+    if (m) {
+      calibrated_ = *m;
+      log::info("cycle", "mapping with calibration files {}, {}, {}", cell.calibration.intrinsics,
+                cell.calibration.handeye, cell.calibration.plane);
+    } else {
+      calibrationError_ = m.error().message;
+      log::error("cycle", "NOT_CALIBRATED: {}", calibrationError_);
+    }
+  }
+}
 
 CycleRunner::~CycleRunner() { stop(); }
 
@@ -132,6 +145,13 @@ CycleResult CycleRunner::runCycle(const Trigger& t) {
     return r;
   }
 
+  if (!calibrationError_.empty()) {
+    r.status = Status::NotCalibrated;
+    r.totalMs = msSince(t.at);
+    log::warn("cycle", "cycle {}: job {}: NOT_CALIBRATED: {}", t.cycleId, t.jobId, calibrationError_);
+    return r;
+  }
+
   const auto grabStart = Clock::now();
   auto g = camera_.grab(frame_, deadline - milliseconds(kProcessingReserveMs));
   r.grabMs = msSince(grabStart);
@@ -173,13 +193,27 @@ CycleResult CycleRunner::runCycle(const Trigger& t) {
     return r;
   }
 
+  if (calibrated_ && (frame_.width != calibrated_->camera().imageSize.width ||
+                      frame_.height != calibrated_->camera().imageSize.height)) {
+    r.status = Status::NotCalibrated;
+    r.totalMs = msSince(t.at);
+    log::warn("cycle", "cycle {}: NOT_CALIBRATED: {} is for {}x{} px, the camera delivers {}x{} px", t.cycleId,
+              cell_.calibration.intrinsics, calibrated_->camera().imageSize.width,
+              calibrated_->camera().imageSize.height, frame_.width, frame_.height);
+    return r;
+  }
+  // Pixel -> base frame at the part height: the calibration files when configured, else
+  // the config's `model` (the simulated cell's known camera).
+  auto toPlane = [&](vision::PixelPoint px, double h) -> std::optional<Vec3> {
+    return calibrated_ ? calibrated_->pixelToRobot(px, h) : model_.pixelToPlane(px, h);
+  };
   const Pose reference = poseFromXyzRz(job->reference.x, job->reference.y, job->reference.z, job->reference.rzDeg * kDegToRad);
   for (const auto& d : *found) {
     // Grasp point and a point 20 px along the part's axis, both onto the plane at the
     // part's grasp height; the robot-frame angle is the direction between them.
     const double a = d.angleDeg * kDegToRad;
-    const auto p = model_.pixelToPlane({d.u, d.v}, job->partHeightMm);
-    const auto q = model_.pixelToPlane({d.u + 20 * std::cos(a), d.v - 20 * std::sin(a)}, job->partHeightMm);
+    const auto p = toPlane({d.u, d.v}, job->partHeightMm);
+    const auto q = toPlane({d.u + 20 * std::cos(a), d.v - 20 * std::sin(a)}, job->partHeightMm);
     if (!p || !q) continue;
     const double rz = std::atan2(q->y - p->y, q->x - p->x) + job->angleOffsetDeg * kDegToRad;
     PartResult part;

@@ -13,11 +13,14 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
+#include <string>
 #include <thread>
 
 #include "config/cell_config.hpp"
 #include "core/cycle.hpp"
 #include "daemon/camera_worker.hpp"
+#include "vision/calib/mapping.hpp"
 #include "vision/calib/plane_model.hpp"
 #include "vision/locate/locator.hpp"
 
@@ -67,6 +70,10 @@ class CycleRunner {
   CameraWorker& camera_;
   CycleSinks sinks_;
   vision::PinholePlaneModel model_;
+  // With a `calibration` section: the mapping from its files, or why they cannot be used
+  // (then every job answers NOT_CALIBRATED with that message).
+  std::optional<vision::calib::CameraPlaneMapping> calibrated_;
+  std::string calibrationError_;
   std::thread thread_;
   std::mutex mutex_;
   std::condition_variable cv_;

@@ -76,6 +76,16 @@ int main(int argc, char** argv) {
   calHeCmd->add_option("--out", calHe.out, "handeye.yaml to write");
   calHeCmd->add_option("--truth", calHe.truth, "truth.yaml of a synthetic set: print each method's error");
   calHeCmd->add_flag("--json", calHe.json, "end with one JSON line");
+  vgr::daemon::CalibPlaneOptions calPl;
+  auto* calPlCmd = calCmd->add_subcommand("plane", "work plane from a plate on the conveyor or robot-touched points");
+  calPlCmd->add_option("--image", calPl.image, "image of a plate lying on the conveyor");
+  calPlCmd->add_option("--intrinsics", calPl.intrinsics, "intrinsics.yaml (with --image)");
+  calPlCmd->add_option("--handeye", calPl.handeye, "eye-to-hand handeye.yaml (with --image)");
+  calPlCmd->add_option("--thickness", calPl.thicknessMm, "plate thickness, mm (with --image)");
+  calPlCmd->add_option("--points", calPl.points, "file of robot-touched points, 'x y z' mm per line");
+  addPattern(calPlCmd, calPl.pattern);
+  calPlCmd->add_option("--out", calPl.out, "plane.yaml to write");
+  calPlCmd->add_flag("--json", calPl.json, "end with one JSON line");
   vgr::daemon::CalibSynthOptions calSyn;
   auto* calSynCmd = calCmd->add_subcommand("synth", "render a synthetic calibration set with ground truth");
   calSynCmd->add_option("--kind", calSyn.kind, "intrinsics or handeye");
@@ -97,6 +107,7 @@ int main(int argc, char** argv) {
   if (*calIntrCmd) return vgr::daemon::runCalibrateIntrinsics(calIntr);
   if (*calHeCmd) return vgr::daemon::runCalibrateHandEye(calHe);
   if (*calSynCmd) return vgr::daemon::runCalibrateSynth(calSyn);
+  if (*calPlCmd) return vgr::daemon::runCalibratePlane(calPl);
 
   if (*camerasCmd) return vgr::daemon::runCameras(camerasJson);
   if (*grabCmd) return vgr::daemon::runGrab(grab);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <sstream>
@@ -528,6 +529,7 @@ Result<void> writeHandEye(const std::string& path, const HandEyeResult& r) {
 
 Result<HandEyeFile> readHandEye(const std::string& path) {
   HandEyeFile f;
+  if (!std::filesystem::exists(path)) return fail(Status::NotCalibrated, fmt::format("{}: no such hand-eye file", path));
   try {
     cv::FileStorage fs(path, cv::FileStorage::READ);
     if (!fs.isOpened()) return fail(Status::NotCalibrated, fmt::format("{}: cannot open hand-eye file", path));

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 
 #include <fmt/core.h>
 #include <opencv2/calib3d.hpp>
@@ -200,6 +201,7 @@ Result<void> writeIntrinsics(const std::string& path, const CameraIntrinsics& ca
 
 Result<CameraIntrinsics> readIntrinsics(const std::string& path) {
   CameraIntrinsics cam;
+  if (!std::filesystem::exists(path)) return fail(Status::NotCalibrated, fmt::format("{}: no such intrinsics file", path));
   try {
     cv::FileStorage fs(path, cv::FileStorage::READ);
     if (!fs.isOpened()) return fail(Status::NotCalibrated, fmt::format("{}: cannot open intrinsics file", path));

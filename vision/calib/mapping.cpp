@@ -1,6 +1,7 @@
 #include "vision/calib/mapping.hpp"
 
 #include <cmath>
+#include <filesystem>
 
 #include <Eigen/SVD>
 #include <fmt/core.h>
@@ -82,6 +83,83 @@ std::optional<PixelPoint> CameraPlaneMapping::robotToPixel(const Vec3& pb) const
   std::vector<cv::Point2d> img;
   cv::projectPoints(obj, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), camera_.cameraMatrix, camera_.dist, img);
   return PixelPoint{img[0].x, img[0].y};
+}
+
+}  // namespace vgr::vision::calib
+
+#include "vision/calib/handeye.hpp"
+
+namespace vgr::vision::calib {
+
+Result<void> writeWorkPlane(const std::string& path, const WorkPlane& plane, const std::string& source) {
+  try {
+    cv::FileStorage fs(path, cv::FileStorage::WRITE);
+    if (!fs.isOpened()) return fail(Status::BadArgument, fmt::format("{}: cannot open for writing", path));
+    fs << "calibration_kind" << "plane" << "source" << source;
+    fs << "point_mm" << cv::Vec3d(plane.point.x, plane.point.y, plane.point.z);
+    fs << "normal" << cv::Vec3d(plane.normal.x, plane.normal.y, plane.normal.z);
+    fs << "fit_rms_mm" << plane.fitRmsMm;
+  } catch (const cv::Exception& e) {
+    return fail(Status::BadArgument, fmt::format("{}: {}", path, e.what()));
+  }
+  return {};
+}
+
+Result<WorkPlane> readWorkPlane(const std::string& path) {
+  WorkPlane p;
+  if (!std::filesystem::exists(path)) return fail(Status::NotCalibrated, fmt::format("{}: no such plane file", path));
+  try {
+    cv::FileStorage fs(path, cv::FileStorage::READ);
+    if (!fs.isOpened()) return fail(Status::NotCalibrated, fmt::format("{}: cannot open plane file", path));
+    cv::Vec3d pt, n;
+    if (fs["point_mm"].empty() || fs["normal"].empty())
+      return fail(Status::NotCalibrated, fmt::format("{}: keys 'point_mm' and 'normal' are required", path));
+    fs["point_mm"] >> pt;
+    fs["normal"] >> n;
+    const double len = cv::norm(n);
+    if (!(len > 0.5 && len < 1.5) || !std::isfinite(pt[0] + pt[1] + pt[2]))
+      return fail(Status::NotCalibrated, fmt::format("{}: key 'normal': not a unit vector", path));
+    p.point = {pt[0], pt[1], pt[2]};
+    p.normal = {n[0] / len, n[1] / len, n[2] / len};
+    p.fitRmsMm = static_cast<double>(fs["fit_rms_mm"]);
+  } catch (const cv::Exception& e) {
+    return fail(Status::NotCalibrated, fmt::format("{}: {}", path, e.what()));
+  }
+  return p;
+}
+
+Result<CameraPlaneMapping> loadCellCalibration(const std::string& intrinsicsPath, const std::string& handEyePath,
+                                               const std::string& planePath, const CellCalibrationLimits& limits) {
+  auto cam = readIntrinsics(intrinsicsPath);
+  if (!cam) return std::unexpected(cam.error());
+  if (cam->rmsPx > limits.maxReprojPx)
+    return fail(Status::NotCalibrated, fmt::format("{}: accepted with rms_px {:.3f}, above the {:.2f} px limit: "
+                                                   "recalibrate",
+                                                   intrinsicsPath, cam->rmsPx, limits.maxReprojPx));
+  auto he = readHandEye(handEyePath);
+  if (!he) return std::unexpected(he.error());
+  if (he->config != HandEyeConfig::EyeToHand)
+    return fail(Status::NotCalibrated, fmt::format("{}: configuration eye-in-hand needs the robot's snapshot pose, "
+                                                   "which vgrd does not take yet; a fixed camera needs eye-to-hand",
+                                                   handEyePath));
+  if (he->reprojRmsPx > limits.maxReprojPx || he->transResidMm > limits.maxHandEyeMm ||
+      he->rotResidDeg > limits.maxHandEyeDeg)
+    return fail(Status::NotCalibrated,
+                fmt::format("{}: residuals {:.3f} px / {:.3f} mm / {:.4f} deg exceed the limits {:.2f} px / {:.2f} mm / "
+                            "{:.2f} deg: recalibrate",
+                            handEyePath, he->reprojRmsPx, he->transResidMm, he->rotResidDeg, limits.maxReprojPx,
+                            limits.maxHandEyeMm, limits.maxHandEyeDeg));
+  auto plane = readWorkPlane(planePath);
+  if (!plane) return std::unexpected(plane.error());
+  // The camera must see the plane from its front: the optical axis points toward it.
+  const se3::Iso x = se3::toIso(he->x);
+  const Eigen::Vector3d axis = x.linear().col(2);
+  const Eigen::Vector3d toPlane = ev(plane->point) - x.translation();
+  if (axis.dot(toPlane) <= 0)
+    return fail(Status::NotCalibrated, fmt::format("{} and {}: the plane lies behind the camera (files from different "
+                                                   "cells?)",
+                                                   handEyePath, planePath));
+  return CameraPlaneMapping(*cam, he->x, *plane);
 }
 
 }  // namespace vgr::vision::calib

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "core/pose.hpp"
@@ -45,11 +46,32 @@ class CameraPlaneMapping {
   std::optional<PixelPoint> robotToPixel(const Vec3& pointBase) const;
 
   const WorkPlane& plane() const { return plane_; }
+  const CameraIntrinsics& camera() const { return camera_; }
 
  private:
   CameraIntrinsics camera_;
   Pose baseFromCamera_;
   WorkPlane plane_;
 };
+
+}  // namespace vgr::vision::calib
+
+namespace vgr::vision::calib {
+
+// plane.yaml (OpenCV FileStorage): point_mm, normal (base frame), fit_rms_mm and how it was
+// made ("plate" or "points").
+Result<void> writeWorkPlane(const std::string& path, const WorkPlane& plane, const std::string& source);
+Result<WorkPlane> readWorkPlane(const std::string& path);
+
+// The calibration a fixed camera's cell maps with: intrinsics.yaml + handeye.yaml
+// (eye-to-hand: X = T_base_cam) + plane.yaml. Errors carry Status::NotCalibrated and name the
+// file and why (missing, malformed, eye-in-hand, residuals above the limits).
+struct CellCalibrationLimits {
+  double maxReprojPx = 1.0;     // intrinsics RMS and hand-eye reprojection RMS
+  double maxHandEyeMm = 2.0;    // hand-eye consistency residual
+  double maxHandEyeDeg = 0.2;
+};
+Result<CameraPlaneMapping> loadCellCalibration(const std::string& intrinsicsPath, const std::string& handEyePath,
+                                               const std::string& planePath, const CellCalibrationLimits& limits = {});
 
 }  // namespace vgr::vision::calib
