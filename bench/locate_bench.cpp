@@ -116,7 +116,7 @@ int main(int argc, char** argv) {
       const auto& d = out->parts.front();
       const auto& t = truths[i];
       const double pos = std::hypot(d.u - t.uPx, d.v - t.vPx);
-      const double ang = std::abs(vgr::bench::normaliseDeg(d.angleDeg - (t.angleImgDeg - tp.truth.angleImgDeg)));
+      const double ang = std::abs(vgr::normaliseDeg(d.angleDeg - (t.angleImgDeg - tp.truth.angleImgDeg)));
       if (verbose) {
         // Signed error in the part's frame (x along the part's axis as displayed).
         const double a = t.angleImgDeg * std::numbers::pi / 180, ex = d.u - t.uPx, ey = d.v - t.vPx;

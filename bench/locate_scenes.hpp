@@ -10,6 +10,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "core/angles.hpp"
 #include "sim/scene.hpp"
 #include "vision/locate/locator.hpp"
 
@@ -27,13 +28,6 @@ inline sim::SceneRenderer makeRenderer(int width, int height, double fPx, double
   o.noiseSigma = noiseSigma;
   o.seed = seed;
   return sim::SceneRenderer(model, o);
-}
-
-inline double normaliseDeg(double a) {
-  a = std::fmod(a, 360.0);
-  if (a <= -180.0) a += 360.0;
-  if (a > 180.0) a -= 360.0;
-  return a;
 }
 
 // The truth of a part whose centroid is at image (u, v) and whose +x axis shows at

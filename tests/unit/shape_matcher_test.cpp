@@ -14,7 +14,7 @@
 
 namespace {
 
-using vgr::bench::normaliseDeg;
+using vgr::normaliseDeg;
 using vgr::sim::SceneTruth;
 
 constexpr int kW = 1280, kH = 1024;

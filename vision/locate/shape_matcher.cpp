@@ -11,6 +11,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "core/angles.hpp"
 #include "vision/locate/params.hpp"
 #include "vision/locate/shape_model.hpp"
 
@@ -23,13 +24,6 @@ using shape::Model;
 constexpr int kChunk = 8;              // model points between early-termination checks
 constexpr double kCoarseSlack = 0.85;  // coarse levels accept minScore * this (blur, rounding)
 constexpr int kBorderFlags = cv::BORDER_REPLICATE | cv::BORDER_ISOLATED;
-
-double normaliseDeg(double a) {
-  a = std::fmod(a, 360.0);
-  if (a <= -180.0) a += 360.0;
-  if (a > 180.0) a -= 360.0;
-  return a;
-}
 
 double angleDist(double a, double b) { return std::abs(std::remainder(a - b, 2 * std::numbers::pi)); }
 
