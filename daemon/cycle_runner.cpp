@@ -68,7 +68,15 @@ Result<void> CycleRunner::prepareJobs() {
     if (templ.empty()) return fail(Status::BadArgument, jf->templatePath() + ": cannot read the template image");
     auto loc = vision::makeLocator(job.method, templ, jf->taught);
     if (!loc) return fail(loc.error().code, fmt::format("job {} ({}): {}", job.id, job.folder, loc.error().message));
-    log::info("cycle", "job {}: method {} from {}", job.id, job.method, job.folder);
+    // The first locate() sizes the method's buffers (the shape matcher: ~1 s at 2448x2048):
+    // pay it now, not in the first cycle's deadline. Size: the camera ROI when configured,
+    // else the simulated sensor (a real sensor's full size is known only once it streams).
+    const int w = cell_.camera.roiWidth > 0 ? cell_.camera.roiWidth : cell_.sim.width;
+    const int h = cell_.camera.roiHeight > 0 ? cell_.camera.roiHeight : cell_.sim.height;
+    const auto warmStart = Clock::now();
+    const auto warm = (*loc)->locate(cv::Mat(h, w, CV_8UC1, cv::Scalar(0)));
+    log::info("cycle", "job {}: method {} from {} (warm-up at {}x{}: {:.0f} ms{})", job.id, job.method, job.folder, w, h,
+              msSince(warmStart), warm ? "" : ", " + warm.error().message);
     locators_[job.id] = std::move(*loc);
   }
   return {};
