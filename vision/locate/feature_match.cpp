@@ -6,6 +6,7 @@
 #include <limits>
 #include <numbers>
 
+#include <opencv2/calib3d.hpp>
 #include <opencv2/flann.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -242,6 +243,27 @@ Result<LocateOutput> locateFeatureParts(const cv::Mat& gray, const TaughtTemplat
     out.candidateMatches = found.front().candidates;
   }
   return out;
+}
+
+std::optional<PartFit> robustHomography(const std::vector<Match>& candidates, const Features& tmpl,
+                                        const Features& img, int robust, double thresholdPx, int maxIters,
+                                        double confidence) {
+  if (candidates.size() < 4) return std::nullopt;
+  std::vector<cv::Point2f> src, dst;
+  src.reserve(candidates.size());
+  dst.reserve(candidates.size());
+  for (const Match& m : candidates) {
+    src.push_back(tmpl.keypoints[static_cast<size_t>(m.t)].pt);
+    dst.push_back(img.keypoints[static_cast<size_t>(m.i)].pt);
+  }
+  std::vector<unsigned char> mask;
+  const cv::Mat H = cv::findHomography(src, dst, robust, thresholdPx, mask, maxIters, confidence);
+  if (H.empty()) return std::nullopt;
+  PartFit fit;
+  fit.H = cv::Matx33d(H);
+  for (size_t k = 0; k < candidates.size() && k < mask.size(); ++k)
+    if (mask[k]) fit.accepted.push_back(candidates[k]);
+  return fit;
 }
 
 }  // namespace vgr::vision::detail

@@ -77,6 +77,14 @@ struct PartFit {
   // when ADK's cluster is too small), so the next round looks elsewhere.
   std::vector<int> consumed;
 };
+// One robust homography over the candidates' keypoint pairs (template -> image) with
+// cv::findHomography's `robust` method (cv::RANSAC, cv::USAC_PROSAC: the candidates arrive
+// best first, PROSAC's "sorted by similarity" order, paper 001 section 4.2). `accepted` are
+// the inliers in candidate order. Empty when fewer than 4 candidates or no fit.
+std::optional<PartFit> robustHomography(const std::vector<Match>& candidates, const Features& tmpl,
+                                        const Features& img, int robust, double thresholdPx, int maxIters,
+                                        double confidence);
+
 // candidates index into tmpl's and img's keypoints.
 using FitFn = std::function<std::optional<PartFit>(const std::vector<Match>& candidates, const Features& tmpl,
                                                     const Features& img)>;

@@ -142,19 +142,11 @@ std::vector<Match> adkCluster(const std::vector<Match>& set, size_t ref, const F
 
 std::optional<PartFit> fitAdk(const std::vector<Match>& candidates, const Features& tmpl, const Features& img,
                               const AdkParams& p, int minInliers) {
-  if (candidates.size() < 4) return std::nullopt;
   // PROSAC over the candidates sorted by descriptor distance (they arrive sorted).
-  std::vector<cv::Point2f> src, dst;
-  for (const Match& m : candidates) {
-    src.push_back(tmpl.keypoints[static_cast<size_t>(m.t)].pt);
-    dst.push_back(img.keypoints[static_cast<size_t>(m.i)].pt);
-  }
-  std::vector<unsigned char> mask;
-  const cv::Mat H0 = cv::findHomography(src, dst, cv::USAC_PROSAC, p.prosacThresholdPx, mask, 2000, 0.995);
-  if (H0.empty()) return std::nullopt;
-  std::vector<Match> set;  // H of the paper: PROSAC's inliers, still most credible first
-  for (size_t k = 0; k < candidates.size() && k < mask.size(); ++k)
-    if (mask[k]) set.push_back(candidates[k]);
+  auto prosac = robustHomography(candidates, tmpl, img, cv::USAC_PROSAC, p.prosacThresholdPx, 2000, 0.995);
+  if (!prosac) return std::nullopt;
+  // H of the paper: PROSAC's inliers, still most credible first.
+  const std::vector<Match>& set = prosac->accepted;
   if (set.size() < 4) return std::nullopt;
 
   // The foremost match is the reference (m11, m21); should its cluster be too small (the
@@ -168,8 +160,7 @@ std::optional<PartFit> fitAdk(const std::vector<Match>& candidates, const Featur
   std::vector<int> consumed;
   for (const Match& m : set) consumed.push_back(m.i);
   if (static_cast<int>(best.size()) < std::max(4, minInliers)) return PartFit{cv::Matx33d::eye(), std::move(best), std::move(consumed)};
-  src.clear();
-  dst.clear();
+  std::vector<cv::Point2f> src, dst;
   for (const Match& m : best) {
     src.push_back(tmpl.keypoints[static_cast<size_t>(m.t)].pt);
     dst.push_back(img.keypoints[static_cast<size_t>(m.i)].pt);

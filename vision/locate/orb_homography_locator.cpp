@@ -26,20 +26,7 @@ struct HomographyParams {
 // "sorted by similarity" order (paper 001, section 4.2).
 std::optional<PartFit> fitHomography(const std::vector<Match>& candidates, const Features& tmpl, const Features& img,
                                      int robust, const HomographyParams& p) {
-  if (candidates.size() < 4) return std::nullopt;
-  std::vector<cv::Point2f> src, dst;
-  for (const Match& m : candidates) {
-    src.push_back(tmpl.keypoints[static_cast<size_t>(m.t)].pt);
-    dst.push_back(img.keypoints[static_cast<size_t>(m.i)].pt);
-  }
-  std::vector<unsigned char> mask;
-  const cv::Mat H = cv::findHomography(src, dst, robust, p.reprojThresholdPx, mask, p.maxIters, p.confidence);
-  if (H.empty()) return std::nullopt;
-  PartFit fit;
-  fit.H = cv::Matx33d(H);
-  for (size_t k = 0; k < candidates.size() && k < mask.size(); ++k)
-    if (mask[k]) fit.accepted.push_back(candidates[k]);
-  return fit;
+  return robustHomography(candidates, tmpl, img, robust, p.reprojThresholdPx, p.maxIters, p.confidence);
 }
 
 class OrbHomographyLocator final : public Locator {
