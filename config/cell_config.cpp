@@ -487,4 +487,22 @@ Result<CellConfig> loadCellConfig(const std::string& path) {
   return parseCellConfig(ss.str(), path);
 }
 
+Result<std::string> writeSimCell(const std::string& dir, const std::string& yamlText) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  fs::create_directories(fs::path(dir) / "sim-calib", ec);
+  if (ec) return fail(Status::BadArgument, dir + ": " + ec.message());
+  const std::pair<std::string, const std::string*> files[] = {
+      {"sim-cell.yaml", &yamlText},
+      {"sim-calib/intrinsics.yaml", &embeddedSimCalibIntrinsics()},
+      {"sim-calib/handeye.yaml", &embeddedSimCalibHandEye()},
+      {"sim-calib/plane.yaml", &embeddedSimCalibPlane()}};
+  for (const auto& [name, text] : files) {
+    std::ofstream out(fs::path(dir) / name);
+    out << *text;
+    if (!out) return fail(Status::BadArgument, (fs::path(dir) / name).string() + ": cannot write");
+  }
+  return (fs::path(dir) / "sim-cell.yaml").string();
+}
+
 }  // namespace vgr::config

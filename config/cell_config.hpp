@@ -196,5 +196,15 @@ Result<CellConfig> parseCellConfig(const std::string& yamlText, const std::strin
 
 // The example simulated cell, embedded at build time from config/examples/sim-cell.yaml.
 const std::string& embeddedSimCellYaml();
+// Its calibration files, embedded from config/examples/sim-calib/ (made by
+// scripts/calibrate-sim-cell.sh from plate images served by the camera emulator).
+const std::string& embeddedSimCalibIntrinsics();
+const std::string& embeddedSimCalibHandEye();
+const std::string& embeddedSimCalibPlane();
+
+// Writes `yamlText` (default: the embedded example) as DIR/sim-cell.yaml and the example's
+// calibration files as DIR/sim-calib/{intrinsics,handeye,plane}.yaml, where the example's
+// `calibration` section finds them. Creates DIR. Returns the config file's path.
+Result<std::string> writeSimCell(const std::string& dir, const std::string& yamlText = embeddedSimCellYaml());
 
 }  // namespace vgr::config

@@ -14,6 +14,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "config/cell_config.hpp"
 #include "sim/calib_scene.hpp"
 #include "vision/calib/handeye.hpp"
 #include "vision/calib/intrinsics.hpp"
@@ -263,23 +264,124 @@ int runCalibratePlane(const CalibPlaneOptions& o) {
   return 0;
 }
 
-int runCalibrateSynth(const CalibSynthOptions& o) {
-  auto spec = patternSpec(o.pattern);
-  if (!spec) return bad(spec.error().message);
-  if (o.out.empty()) return bad("--out: a folder is needed");
-  std::error_code ec;
-  fs::create_directories(o.out, ec);
-  if (ec) return bad(fmt::format("{}: {}", o.out, ec.message()));
-  const sim::TrueCamera cam = sim::defaultCalibCamera();
+namespace {
+
+// One poses.txt line in the controller's own convention (docs/calibration.md).
+std::string poseLine(const std::string& format, const std::string& name, const Pose& p) {
+  if (format == "abb") return fmt::format("{} {:.4f} {:.4f} {:.4f} {:.9f} {:.9f} {:.9f} {:.9f}\n", name, p.x, p.y, p.z, p.qw, p.qx, p.qy, p.qz);
+  if (format == "fanuc") {
+    const EulerZyxDeg e = toEulerZyxDeg(p);
+    return fmt::format("{} {:.4f} {:.4f} {:.4f} {:.6f} {:.6f} {:.6f}\n", name, p.x, p.y, p.z, e.rx, e.ry, e.rz);
+  }
+  const Vec3 rv = toRotationVector(p);
+  return fmt::format("{} {:.7f} {:.7f} {:.7f} {:.9f} {:.9f} {:.9f}\n", name, p.x / 1000, p.y / 1000, p.z / 1000, rv.x, rv.y, rv.z);
+}
+
+// The views' images, poses.txt and truth.yaml (handeye.yaml layout, for `--truth`) in `dir`.
+int writeHandEyeSet(const sim::TrueCamera& cam, const calib::PatternSpec& spec, const sim::HandEyeScenario& s,
+                    const CalibSynthOptions& o, const fs::path& dir) {
   sim::PlateRenderOptions ro;
-  // The true camera, in the intrinsics file format (for comparison).
+  std::ofstream pf(dir / "poses.txt");
+  pf << "# robot poses T_base_gripper as the controller reports them, one line per image\n";
+  pf << "format " << o.poseFormat << "\nunits " << (o.poseFormat == "ur" ? "m" : "mm") << "\n";
+  for (std::size_t i = 0; i < s.camFromPlate.size(); ++i) {
+    ro.seed = o.seed * 1000 + i;
+    const std::string name = fmt::format("pose_{:03d}.png", i);
+    cv::imwrite((dir / name).string(), sim::renderPlate(cam, spec, s.camFromPlate[i], ro));
+    pf << poseLine(o.poseFormat, name, s.robotReported[i]);
+    progress(i + 1, s.camFromPlate.size(), name, "rendered");
+  }
+  pf.close();
+  try {
+    cv::FileStorage f((dir / "truth.yaml").string(), cv::FileStorage::WRITE);
+    auto mat = [](const Pose& p) {
+      const Eigen::Matrix4d m = se3::toIso(p).matrix();
+      cv::Mat out(4, 4, CV_64F);
+      for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) out.at<double>(i, j) = m(i, j);
+      return out;
+    };
+    f << "calibration_kind" << "handeye_truth" << "configuration" << calib::handEyeConfigName(s.config);
+    f << "x" << mat(s.x) << "y" << mat(s.y) << "method" << "truth";
+  } catch (const cv::Exception& e) {
+    return bad(e.what());
+  }
+  return 0;
+}
+
+// A plate lying face up on the conveyor plane (z = planeZ), centred at (x, y), for
+// `vgr calibrate plane --image`, seen by the eye-to-hand camera mounted at `baseFromCam`.
+void writeConveyorPlate(const sim::TrueCamera& cam, const calib::PatternSpec& spec, const Pose& baseFromCam, double x,
+                        double y, double planeZ, std::uint64_t seed, const fs::path& dir) {
+  const Eigen::Vector3d centre((spec.cols - 1) * spec.pitchMm / 2, (spec.rows - 1) * spec.pitchMm / 2, 0);
+  const se3::Iso basePlate = Eigen::Translation3d(x, y, planeZ) * Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitZ()) *
+                             Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()) * Eigen::Translation3d(-centre);
+  sim::PlateRenderOptions ro;
+  ro.seed = seed * 1000 + 999;
+  fs::create_directories(dir);  // not in the hand-eye folder: it has no robot pose
+  cv::imwrite((dir / "conveyor_plate.png").string(),
+              sim::renderPlate(cam, spec, se3::toPose(se3::toIso(baseFromCam).inverse() * basePlate), ro));
+}
+
+Result<void> writeCameraTruth(const sim::TrueCamera& cam, const fs::path& path) {
   calib::CameraIntrinsics truthCam;
   truthCam.cameraMatrix = cam.cameraMatrix;
   truthCam.dist = cam.dist;
   truthCam.imageSize = cam.imageSize;
-  if (auto w = calib::writeIntrinsics((fs::path(o.out) / "camera_truth.yaml").string(), truthCam); !w)
-    return bad(w.error().message);
+  return calib::writeIntrinsics(path.string(), truthCam);
+}
+
+// --kind cell: what commissioning a real eye-to-hand cell collects, for the cell's own
+// camera (docs/calibration.md, "The simulated cell, calibrated like a real one"):
+// intrinsics/ (a plate shown at varied tilts), handeye/ (the plate on the flange, robot
+// poses), plane/ (the plate lying on the conveyor).
+int synthCell(const CalibSynthOptions& o, const calib::PatternSpec& spec) {
+  auto cell = o.cellConfig.empty() ? config::parseCellConfig(config::embeddedSimCellYaml(), "<embedded sim-cell.yaml>")
+                                   : config::loadCellConfig(o.cellConfig);
+  if (!cell) return bad(cell.error().message);
+  const sim::TrueCamera cam = sim::cellCamera(*cell);
+  const Pose mount = sim::cellCameraMount(*cell);
+  // Plates held 300-460 mm below a camera 500 mm above the belt (randomPlateViews: +-20 %).
+  const double distance = std::min(o.distanceMm, 0.76 * (cell->model.camZ - cell->model.planeZ));
+  const fs::path out(o.out);
+  fs::create_directories(out / "intrinsics");
+  fs::create_directories(out / "handeye");
+  if (auto w = writeCameraTruth(cam, out / "camera_truth.yaml"); !w) return bad(w.error().message);
+  sim::PlateRenderOptions ro;
+  const auto views = sim::randomPlateViews(cam, spec, o.views, o.seed, distance, o.maxTiltDeg);
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    ro.seed = o.seed * 1000 + 500 + i;
+    const std::string name = fmt::format("plate_{:03d}.png", i);
+    cv::imwrite((out / "intrinsics" / name).string(), sim::renderPlate(cam, spec, views[i], ro));
+    progress(i + 1, views.size(), "intrinsics/" + name, "rendered");
+  }
+  const auto s = sim::makeHandEyeScenario(calib::HandEyeConfig::EyeToHand, cam, spec, o.views, o.seed + 1, o.robotNoiseMm,
+                                          o.robotNoiseDeg, mount, distance);
+  if (int rc = writeHandEyeSet(cam, spec, s, o, out / "handeye"); rc != 0) return rc;
+  writeConveyorPlate(cam, spec, mount, cell->model.camX, cell->model.camY, cell->model.planeZ, o.seed, out / "plane");
+  std::printf("%s: intrinsics/ (%zu views), handeye/ (%zu poses, eye-to-hand, %s), plane/ and camera_truth.yaml for %s\n",
+              o.out.c_str(), views.size(), s.camFromPlate.size(), o.poseFormat.c_str(),
+              o.cellConfig.empty() ? "the embedded sim cell" : o.cellConfig.c_str());
+  return 0;
+}
+
+}  // namespace
+
+int runCalibrateSynth(const CalibSynthOptions& o) {
+  auto spec = patternSpec(o.pattern);
+  if (!spec) return bad(spec.error().message);
+  if (o.out.empty()) return bad("--out: a folder is needed");
+  if (o.poseFormat != "abb" && o.poseFormat != "fanuc" && o.poseFormat != "ur")
+    return bad(fmt::format("--pose-format '{}': expected abb, fanuc or ur", o.poseFormat));
+  std::error_code ec;
+  fs::create_directories(o.out, ec);
+  if (ec) return bad(fmt::format("{}: {}", o.out, ec.message()));
+  if (o.kind == "cell") return synthCell(o, *spec);
+  const sim::TrueCamera cam = sim::defaultCalibCamera();
+  // The true camera, in the intrinsics file format (for comparison).
+  if (auto w = writeCameraTruth(cam, fs::path(o.out) / "camera_truth.yaml"); !w) return bad(w.error().message);
   if (o.kind == "intrinsics") {
+    sim::PlateRenderOptions ro;
     const auto poses = sim::randomPlateViews(cam, *spec, o.views, o.seed, o.distanceMm, o.maxTiltDeg);
     for (std::size_t i = 0; i < poses.size(); ++i) {
       ro.seed = o.seed * 1000 + i;
@@ -290,59 +392,14 @@ int runCalibrateSynth(const CalibSynthOptions& o) {
     std::printf("%zu plate images and camera_truth.yaml in %s\n", poses.size(), o.out.c_str());
     return 0;
   }
-  if (o.kind != "handeye") return bad(fmt::format("--kind '{}': expected intrinsics or handeye", o.kind));
+  if (o.kind != "handeye") return bad(fmt::format("--kind '{}': expected intrinsics, handeye or cell", o.kind));
   calib::HandEyeConfig cfg;
   if (o.configuration == "eye-in-hand") cfg = calib::HandEyeConfig::EyeInHand;
   else if (o.configuration == "eye-to-hand") cfg = calib::HandEyeConfig::EyeToHand;
   else return bad(fmt::format("--configuration '{}': expected eye-in-hand or eye-to-hand", o.configuration));
-  if (o.poseFormat != "abb" && o.poseFormat != "fanuc" && o.poseFormat != "ur")
-    return bad(fmt::format("--pose-format '{}': expected abb, fanuc or ur", o.poseFormat));
   const auto s = sim::makeHandEyeScenario(cfg, cam, *spec, o.views, o.seed, o.robotNoiseMm, o.robotNoiseDeg);
-  std::ofstream pf(fs::path(o.out) / "poses.txt");
-  pf << "# robot poses T_base_gripper as the controller reports them, one line per image\n";
-  pf << "format " << o.poseFormat << "\nunits " << (o.poseFormat == "ur" ? "m" : "mm") << "\n";
-  for (std::size_t i = 0; i < s.camFromPlate.size(); ++i) {
-    ro.seed = o.seed * 1000 + i;
-    const std::string name = fmt::format("pose_{:03d}.png", i);
-    cv::imwrite((fs::path(o.out) / name).string(), sim::renderPlate(cam, *spec, s.camFromPlate[i], ro));
-    const Pose& p = s.robotReported[i];
-    if (o.poseFormat == "abb") {
-      pf << fmt::format("{} {:.4f} {:.4f} {:.4f} {:.9f} {:.9f} {:.9f} {:.9f}\n", name, p.x, p.y, p.z, p.qw, p.qx, p.qy, p.qz);
-    } else if (o.poseFormat == "fanuc") {
-      const EulerZyxDeg e = toEulerZyxDeg(p);
-      pf << fmt::format("{} {:.4f} {:.4f} {:.4f} {:.6f} {:.6f} {:.6f}\n", name, p.x, p.y, p.z, e.rx, e.ry, e.rz);
-    } else {
-      const Vec3 rv = toRotationVector(p);
-      pf << fmt::format("{} {:.7f} {:.7f} {:.7f} {:.9f} {:.9f} {:.9f}\n", name, p.x / 1000, p.y / 1000, p.z / 1000, rv.x,
-                        rv.y, rv.z);
-    }
-    progress(i + 1, s.camFromPlate.size(), name, "rendered");
-  }
-  pf.close();
-  if (cfg == calib::HandEyeConfig::EyeToHand) {
-    // A plate lying face up on the conveyor (z = 0) for `vgr calibrate plane --image`.
-    const se3::Iso basePlate = Eigen::Translation3d(330, -60, 0) * Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitZ()) *
-                               Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX());
-    ro.seed = o.seed * 1000 + 999;
-    fs::create_directories(fs::path(o.out) / "plane");  // not in the hand-eye folder: it has no robot pose
-    cv::imwrite((fs::path(o.out) / "plane" / "conveyor_plate.png").string(),
-                sim::renderPlate(cam, *spec, se3::toPose(se3::toIso(s.x).inverse() * basePlate), ro));
-  }
-  // truth.yaml in the handeye.yaml layout, so `vgr calibrate handeye --truth` can read it.
-  try {
-    cv::FileStorage f((fs::path(o.out) / "truth.yaml").string(), cv::FileStorage::WRITE);
-    auto mat = [](const Pose& p) {
-      const Eigen::Matrix4d m = se3::toIso(p).matrix();
-      cv::Mat out(4, 4, CV_64F);
-      for (int i = 0; i < 4; ++i)
-        for (int j = 0; j < 4; ++j) out.at<double>(i, j) = m(i, j);
-      return out;
-    };
-    f << "calibration_kind" << "handeye_truth" << "configuration" << calib::handEyeConfigName(cfg);
-    f << "x" << mat(s.x) << "y" << mat(s.y) << "method" << "truth";
-  } catch (const cv::Exception& e) {
-    return bad(e.what());
-  }
+  if (int rc = writeHandEyeSet(cam, *spec, s, o, fs::path(o.out)); rc != 0) return rc;
+  if (cfg == calib::HandEyeConfig::EyeToHand) writeConveyorPlate(cam, *spec, s.x, 330, -60, 0, o.seed, fs::path(o.out) / "plane");
   std::printf("%zu images, poses.txt (%s), truth.yaml and camera_truth.yaml in %s\n", s.camFromPlate.size(),
               o.poseFormat.c_str(), o.out.c_str());
   return 0;

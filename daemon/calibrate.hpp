@@ -45,7 +45,8 @@ struct CalibPlaneOptions {
 int runCalibratePlane(const CalibPlaneOptions& o);
 
 struct CalibSynthOptions {
-  std::string kind = "intrinsics";     // intrinsics | handeye
+  std::string kind = "intrinsics";     // intrinsics | handeye | cell
+  std::string cellConfig;              // cell: the cell config whose camera to use (default: the embedded sim cell)
   std::string out;                     // folder (created)
   std::string configuration = "eye-to-hand";
   std::string poseFormat = "abb";      // abb | fanuc | ur

@@ -14,7 +14,10 @@
 #include <optional>
 #include <vector>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include "config/cell_config.hpp"
 #include "daemon/process.hpp"
@@ -89,6 +92,43 @@ struct RobotTally {
 
 }  // namespace
 
+// --method: teaches `method` on the template of the cell's textured part with `vgr teach`
+// (work/job) and writes work/sim-cell-taught.yaml: the example with sim.scene `part` and its
+// job 1 replaced by that folder, angle_offset_deg the base +x axis in the image (the
+// template shows the part at rz = 0). Returns the config's path.
+Result<std::string> teachDemoJob(config::CellConfig cell, const std::string& bin, const std::string& work,
+                                 const std::string& method) {
+  if (cell.sim.scene == "plate") cell.sim.scene = "part";
+  const sim::CellScenes scenes(cell);
+  cv::Mat templ;
+  const auto t = scenes.partRenderer()->renderTemplate(templ);
+  fs::create_directories(work + "/teach");
+  const std::string image = work + "/teach/template.png";
+  if (!cv::imwrite(image, templ)) return fail(Status::BadArgument, image + ": cannot write");
+  const std::string job = work + "/job";
+  auto teach = ChildProcess::spawn({bin + "/vgr", "teach", "--image", image, "--grasp", fmt::format("{:.3f},{:.3f}", t.graspU, t.graspV),
+                                    "--method", method, "--part-height", fmt::format("{:.3f}", scenes.partRenderer()->part().graspHeightMm),
+                                    "--out", job},
+                                   work + "/teach/teach.log");
+  if (!teach || teach->wait(milliseconds(60000)) != 0) {
+    std::ifstream in(work + "/teach/teach.log");
+    std::string log((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    return fail(Status::BadArgument, "vgr teach --method " + method + " failed: " + log);
+  }
+  std::string yaml = config::embeddedSimCellYaml();
+  const auto a = yaml.find("jobs:\n"), b = yaml.find("\n# Used by the simulators");
+  const auto s = yaml.find("\nsim:\n");
+  if (a == std::string::npos || b == std::string::npos || s == std::string::npos || !(a < b && b < s))
+    return fail(Status::BadArgument, "the embedded sim-cell.yaml has no jobs/sim sections where expected");
+  yaml.replace(s, 6, "\nsim:\n  scene: " + cell.sim.scene + "\n");
+  yaml.replace(a, b - a, fmt::format("jobs:\n  - id: 1\n    name: taught-{}\n    folder: {}\n    angle_offset_deg: {:.6f}\n",
+                                     method, job, sim::baseXAxisImageAngleDeg(cell)));
+  const std::string path = work + "/sim-cell-taught.yaml";
+  std::ofstream(path) << yaml;
+  std::printf("vgr demo: taught a %s job on the textured part (%s), config %s\n", method.c_str(), job.c_str(), path.c_str());
+  return path;
+}
+
 // The last lines of the cell's log, so a failed start says why right away.
 void printLogTail(const std::string& path, std::size_t lines = 6) {
   std::ifstream in(path);
@@ -107,6 +147,11 @@ int runDemo(const DemoOptions& o) {
     return 2;
   }
   if (o.seed >= 0) cfg->sim.seed = static_cast<std::uint64_t>(o.seed);
+  if (!o.method.empty() && !o.configPath.empty()) {
+    std::fprintf(stderr, "vgr demo: --method runs the embedded example cell; for your own config, teach a job with "
+                         "`vgr teach` and name its folder in the config's jobs (docs/localization.md)\n");
+    return 2;
+  }
   const std::string bin = o.binDir.empty() ? selfDir() : o.binDir;
   std::string work = o.workDir;
   if (work.empty()) {
@@ -120,8 +165,26 @@ int runDemo(const DemoOptions& o) {
   fs::create_directories(work);
   std::string configFile = o.configPath;
   if (configFile.empty()) {
-    configFile = work + "/sim-cell.yaml";
-    std::ofstream(configFile) << config::embeddedSimCellYaml();
+    // The example and the calibration files it maps with (config/examples/sim-calib).
+    auto written = config::writeSimCell(work);
+    if (!written) {
+      std::fprintf(stderr, "vgr demo: %s\n", written.error().message.c_str());
+      return 2;
+    }
+    configFile = *written;
+  }
+  if (!o.method.empty()) {
+    if (auto taught = teachDemoJob(*cfg, bin, work, o.method); !taught) {
+      std::fprintf(stderr, "vgr demo: %s\n", taught.error().message.c_str());
+      return 2;
+    } else {
+      configFile = *taught;
+      cfg = config::loadCellConfig(configFile);
+      if (!cfg) {
+        std::fprintf(stderr, "vgr demo: %s\n", cfg.error().message.c_str());
+        return 2;
+      }
+    }
   }
   const std::string journal = work + "/journal.jsonl";
   const std::string logs = work + "/logs.txt";

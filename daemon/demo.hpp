@@ -16,6 +16,10 @@ struct DemoOptions {
   int intervalMs = 0;          // PLC pause between cycles
   std::int64_t seed = -1;      // scene seed; -1: the config's sim.seed
   bool quiet = false;          // no per-cycle lines
+  // Non-empty: run a job of this localization method instead of the example's `moments`
+  // job, taught with `vgr teach` on the textured part (sim.scene `part` unless the config
+  // says `multi`), the way an integrator teaches a reference part. Embedded config only.
+  std::string method;
 };
 
 // Returns the process exit code: 0 when every cycle delivered a pose and every robot reply

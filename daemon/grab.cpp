@@ -6,9 +6,14 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <map>
 #include <thread>
 #include <vector>
+
+#include <fmt/format.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include "config/cell_config.hpp"
 #include "daemon/camera_worker.hpp"
@@ -92,6 +97,14 @@ int runGrab(const GrabOptions& o) {
   (*made)->close();
 
   CameraWorker worker(cam, std::move(*made));
+  if (!o.saveFolder.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(o.saveFolder, ec);
+    if (ec) {
+      std::fprintf(stderr, "vgr grab: --save %s: %s\n", o.saveFolder.c_str(), ec.message().c_str());
+      return 2;
+    }
+  }
   worker.start();
   if (!worker.waitStreaming(milliseconds(15000))) {
     std::fprintf(stderr, "vgr grab: %s: not streaming after 15 s\n", worker.describe().c_str());
@@ -108,6 +121,15 @@ int runGrab(const GrabOptions& o) {
     drivers::FrameStatus st = drivers::FrameStatus::Ok;
     auto r = worker.grab(frame, t0 + milliseconds(deadlineMs), &st);
     const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    if (r && !o.saveFolder.empty()) {
+      // Mono8 or host-endian Mono16 (PNG stores 16 bits as they are).
+      const cv::Mat img(frame.height, frame.width, frame.bytesPerPixel() == 2 ? CV_16UC1 : CV_8UC1, frame.data.data());
+      const std::string path = fmt::format("{}/frame_{:06d}.png", o.saveFolder, frame.frameId);
+      if (!cv::imwrite(path, img)) {
+        std::fprintf(stderr, "vgr grab: cannot write %s\n", path.c_str());
+        return 1;
+      }
+    }
     if (r) {
       ++ok;
       latencies.push_back(ms);

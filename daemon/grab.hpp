@@ -17,6 +17,7 @@ struct GrabOptions {
   int deadlineMs = 0;       // trigger -> frame deadline per trigger (default: the cell's cycle deadline)
   int intervalMs = 0;       // pause between triggers
   bool json = false;        // machine-readable output; the last line is the summary object
+  std::string saveFolder;   // if set: every frame received is written there as frame_<device frame id>.png
 };
 
 // Triggers `count` frames through the daemon's CameraWorker (re-trigger policy and

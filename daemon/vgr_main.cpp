@@ -29,6 +29,7 @@ int main(int argc, char** argv) {
   demoCmd->add_option("--interval-ms", demo.intervalMs, "PLC pause between cycles")->check(CLI::Range(0, 60000));
   demoCmd->add_option("--seed", demo.seed, "scene seed (default: the config's sim.seed)");
   demoCmd->add_flag("--quiet", demo.quiet, "only the summary lines");
+  demoCmd->add_option("--method", demo.method, "run a job of this method taught on the textured part (moments, hu, sift, orb-ransac, orb-prosac, orb-adk, contour-weighted, shape)");
 
   std::string checkPath;
   auto* checkCmd = app.add_subcommand("check", "validate a cell config; prints file:line and key on error");
@@ -50,6 +51,7 @@ int main(int argc, char** argv) {
   grabCmd->add_option("--timeout-ms", grab.timeoutMs, "trigger -> frame timeout per attempt")->check(CLI::Range(50, 60000));
   grabCmd->add_option("--deadline-ms", grab.deadlineMs, "trigger -> frame deadline incl. re-triggers (default: cycle_deadline_ms)")->check(CLI::Range(50, 600000));
   grabCmd->add_option("--interval-ms", grab.intervalMs, "pause between triggers")->check(CLI::Range(0, 60000));
+  grabCmd->add_option("--save", grab.saveFolder, "write every frame received to this folder as frame_<frame id>.png");
   grabCmd->add_flag("--json", grab.json, "JSON output; the last line is {\"frames\",\"ok\",\"errors\",\"p50_ms\",\"p99_ms\"}");
 
   // vgr calibrate ... (docs/calibration.md)
@@ -88,7 +90,8 @@ int main(int argc, char** argv) {
   calPlCmd->add_flag("--json", calPl.json, "end with one JSON line");
   vgr::daemon::CalibSynthOptions calSyn;
   auto* calSynCmd = calCmd->add_subcommand("synth", "render a synthetic calibration set with ground truth");
-  calSynCmd->add_option("--kind", calSyn.kind, "intrinsics or handeye");
+  calSynCmd->add_option("--kind", calSyn.kind, "intrinsics, handeye or cell (all three sets for a cell's camera)");
+  calSynCmd->add_option("--cell", calSyn.cellConfig, "cell config for --kind cell (default: the embedded sim cell)");
   calSynCmd->add_option("--out", calSyn.out, "folder to write")->required();
   calSynCmd->add_option("--configuration", calSyn.configuration, "eye-in-hand or eye-to-hand (handeye)");
   calSynCmd->add_option("--pose-format", calSyn.poseFormat, "abb, fanuc or ur (handeye)");

@@ -9,6 +9,7 @@ PACKAGES=(
   libopencv-dev libeigen3-dev
   libaravis-dev aravis-tools libusb-1.0-0-dev
   libmodbus-dev mbpoll python3-pymodbus
+  python3-serial-asyncio  # pymodbus 3.0 imports it at "from pymodbus.client import ..." but only Recommends it
   libboost-dev libspdlog-dev libfmt-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
   libsystemd-dev systemd
   iproute2  # camera_multi_test adds 127.0.0.2 to lo for a second emulated camera

@@ -5,6 +5,8 @@
 
 #include <opencv2/calib3d.hpp>
 
+#include "config/cell_config.hpp"
+#include "vision/calib/plane_model.hpp"
 #include "vision/calib/se3.hpp"
 
 namespace vgr::sim {
@@ -35,6 +37,20 @@ double patternValue(const PatternSpec& s, double x, double y) {
 }
 
 }  // namespace
+
+TrueCamera cellCamera(const config::CellConfig& cell) {
+  const auto& m = cell.model;
+  TrueCamera c;
+  c.cameraMatrix = cv::Matx33d(m.fx, 0, m.cx, 0, m.fy, m.cy, 0, 0, 1);
+  c.dist = cv::Vec<double, 5>(0, 0, 0, 0, 0);
+  c.imageSize = cv::Size(cell.sim.width, cell.sim.height);
+  return c;
+}
+
+Pose cellCameraMount(const config::CellConfig& cell) {
+  const auto& m = cell.model;
+  return vision::PinholePlaneModel::downLookingCamera(m.camX, m.camY, m.camZ, m.camRzDeg);
+}
 
 TrueCamera defaultCalibCamera() {
   TrueCamera c;
@@ -182,7 +198,7 @@ std::vector<Pose> randomPlateViews(const TrueCamera& cam, const PatternSpec& spe
 
 HandEyeScenario makeHandEyeScenario(vision::calib::HandEyeConfig config, const TrueCamera& cam,
                                     const PatternSpec& spec, int n, std::uint64_t seed, double robotNoiseMm,
-                                    double robotNoiseDeg) {
+                                    double robotNoiseDeg, const std::optional<Pose>& fixedX, double distanceMm) {
   HandEyeScenario s;
   s.config = config;
   se3::Iso x = se3::Iso::Identity(), y = se3::Iso::Identity();
@@ -201,9 +217,10 @@ HandEyeScenario makeHandEyeScenario(vision::calib::HandEyeConfig config, const T
     y.linear() = Eigen::AngleAxisd(0.7, Eigen::Vector3d(0.3, -0.4, 1.0).normalized()).toRotationMatrix();
     y.translation() = Eigen::Vector3d(-75.0, -52.0, 41.0);
   }
+  if (fixedX) x = se3::toIso(*fixedX);
   s.x = se3::toPose(x);
   s.y = se3::toPose(y);
-  s.camFromPlate = randomPlateViews(cam, spec, n, seed);
+  s.camFromPlate = randomPlateViews(cam, spec, n, seed, distanceMm);
   std::mt19937_64 rng(seed * 0xD6E8FEB86659FD93ull + 5);
   std::normal_distribution<double> nt(0.0, robotNoiseMm), nr(0.0, robotNoiseDeg * kDeg);
   for (const auto& b : s.camFromPlate) {

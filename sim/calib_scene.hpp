@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -12,6 +13,10 @@
 #include "core/pose.hpp"
 #include "vision/calib/handeye.hpp"
 #include "vision/calib/intrinsics.hpp"
+
+namespace vgr::config {
+struct CellConfig;
+}
 
 namespace vgr::sim {
 
@@ -62,8 +67,16 @@ struct HandEyeScenario {
 
 // n views whose plate poses come from randomPlateViews(); robot noise is Gaussian per axis
 // (mm on x, y, z; degrees as a small rotation vector).
+// `fixedX`: the true hand-eye X to use (e.g. a cell's camera mount) instead of the built-in
+// one; `distanceMm`: camera-plate distance of the views (randomPlateViews).
 HandEyeScenario makeHandEyeScenario(vision::calib::HandEyeConfig config, const TrueCamera& cam,
                                     const vision::calib::PatternSpec& spec, int n, std::uint64_t seed,
-                                    double robotNoiseMm, double robotNoiseDeg);
+                                    double robotNoiseMm, double robotNoiseDeg, const std::optional<Pose>& fixedX = {},
+                                    double distanceMm = 450);
+
+// The camera of a cell config's simulated cell (its `model`: the camera the emulator renders
+// through, no lens distortion) and its mount T_base_cam.
+TrueCamera cellCamera(const config::CellConfig& cell);
+Pose cellCameraMount(const config::CellConfig& cell);
 
 }  // namespace vgr::sim

@@ -42,7 +42,10 @@ class calib_vgrd : public ModbusCell {};
 
 TEST_F(calib_vgrd, missing_calibration_file_gives_not_calibrated) {
   ASSERT_NO_FATAL_FAILURE(startCell([](std::string yaml) {
-    return yaml + "\ncalibration:\n  intrinsics: intrinsics.yaml\n  handeye: handeye.yaml\n  plane: plane.yaml\n";
+    // The example's calibration section, pointed at files that are not there.
+    for (auto at = yaml.find("sim-calib/"); at != std::string::npos; at = yaml.find("sim-calib/"))
+      yaml.replace(at, 10, "missing-calib/");
+    return yaml;
   }));
   int rc = -1;
   run(mbpoll("-r 1 -t 4 127.0.0.1 1"), &rc);  // JOB_ID 1

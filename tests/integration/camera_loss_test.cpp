@@ -37,8 +37,7 @@ class CameraLoss : public ::testing::Test {
     cv::Mat img;
     vgr::sim::SceneRenderer::fromCellConfig(cell).render(1, img);
     ASSERT_TRUE(cv::imwrite((dir_ / "images" / "scene.png").string(), img));
-    configPath_ = (dir_ / "cell.yaml").string();
-    std::ofstream(configPath_) << vgr::config::embeddedSimCellYaml();
+    configPath_ = *vgr::config::writeSimCell(dir_.string());  // + its calibration files
     auto p = ChildProcess::spawn({std::string(VGR_BIN_DIR) + "/vgr-sim-camera", "--images", (dir_ / "images").string(),
                                   "--loss", "0.0001"},
                                  (dir_ / "camera.log").string());

@@ -68,8 +68,7 @@ class CameraReconnect : public ::testing::Test {
   void SetUp() override {
     dir_ = fs::temp_directory_path() / ("vgr-camera-reconnect-" + std::to_string(::getpid()));
     fs::create_directories(dir_);
-    configPath_ = (dir_ / "cell.yaml").string();
-    std::ofstream(configPath_) << vgr::config::embeddedSimCellYaml();
+    configPath_ = *vgr::config::writeSimCell(dir_.string());  // + its calibration files
     cfg_ = *vgr::config::parseCellConfig(vgr::config::embeddedSimCellYaml(), "embedded");
   }
   void TearDown() override {

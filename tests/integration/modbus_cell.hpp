@@ -58,8 +58,10 @@ class ModbusCell : public ::testing::Test {
     auto cfg = config::parseCellConfig(yaml, "cell.yaml");
     ASSERT_TRUE(cfg.has_value()) << cfg.error().message;
     cfg_ = *cfg;
-    configPath_ = (dir_ / "cell.yaml").string();
-    std::ofstream(configPath_) << yaml;
+    // The config and the calibration files its `calibration` section names.
+    auto written = config::writeSimCell(dir_.string(), yaml);
+    ASSERT_TRUE(written.has_value()) << written.error().message;
+    configPath_ = *written;
     ASSERT_NO_FATAL_FAILURE(startCamera()) << log("camera.log");
     ASSERT_NO_FATAL_FAILURE(startVgrd());
   }

@@ -99,7 +99,12 @@ TEST_F(calib_files, each_bad_file_is_named_with_the_reason) {
 }
 
 TEST_F(calib_files, config_section_paths_are_relative_to_the_config) {
-  std::string yaml = config::embeddedSimCellYaml();
+  // The example cell without its own `calibration` section.
+  std::string base = config::embeddedSimCellYaml();
+  const auto from = base.find("\ncalibration:\n"), to = base.find("\nmodbus:");
+  ASSERT_TRUE(from != std::string::npos && to != std::string::npos);
+  base.erase(from, to - from);
+  std::string yaml = base;
   yaml += "\ncalibration:\n  intrinsics: intrinsics.yaml\n  handeye: /abs/handeye.yaml\n  plane: sub/plane.yaml\n";
   auto c = config::parseCellConfig(yaml, path("cell.yaml"));
   ASSERT_TRUE(c) << c.error().message;
@@ -108,14 +113,19 @@ TEST_F(calib_files, config_section_paths_are_relative_to_the_config) {
   EXPECT_EQ(c->calibration.handeye, "/abs/handeye.yaml");
   EXPECT_EQ(c->calibration.plane, path("sub/plane.yaml"));
   // A missing key is named with file and line.
-  std::string partial = config::embeddedSimCellYaml() + "\ncalibration:\n  intrinsics: i.yaml\n  plane: p.yaml\n";
+  std::string partial = base + "\ncalibration:\n  intrinsics: i.yaml\n  plane: p.yaml\n";
   auto bad = config::parseCellConfig(partial, "cell.yaml");
   ASSERT_FALSE(bad);
   EXPECT_NE(bad.error().message.find("calibration.handeye"), std::string::npos) << bad.error().message;
   // Without the section: the `model` mapping, as before.
-  auto none = config::parseCellConfig(config::embeddedSimCellYaml(), "cell.yaml");
+  auto none = config::parseCellConfig(base, "cell.yaml");
   ASSERT_TRUE(none);
   EXPECT_FALSE(none->calibration.enabled);
+  // The example cell maps with its calibration files, next to it.
+  auto example = config::parseCellConfig(config::embeddedSimCellYaml(), path("cell.yaml"));
+  ASSERT_TRUE(example);
+  EXPECT_TRUE(example->calibration.enabled);
+  EXPECT_EQ(example->calibration.handeye, path("sim-calib/handeye.yaml"));
 }
 
 }  // namespace

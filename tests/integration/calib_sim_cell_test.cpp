@@ -1,0 +1,101 @@
+// The simulated cell is calibrated like a real one (issue 5): scripts/calibrate-sim-cell.sh
+// renders plate views for the cell's camera, serves them with the camera emulator, grabs
+// them over Aravis with `vgr grab --save` and runs `vgr calibrate intrinsics / handeye /
+// plane` on the grabbed frames. Checked here against the simulator's true camera (the
+// config's `model`): intrinsics, the camera mount (hand-eye X) and the pixel -> robot
+// mapping at the belt and at 25 mm; and the files committed in config/examples/sim-calib
+// map like the ones the script makes now.
+#include <sys/wait.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include <gtest/gtest.h>
+
+#include "config/cell_config.hpp"
+#include "vision/calib/handeye.hpp"
+#include "vision/calib/mapping.hpp"
+#include "vision/calib/plane_model.hpp"
+#include "vision/calib/se3.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+namespace calib = vgr::vision::calib;
+
+// Largest distance between two pixel -> robot mappings over a 9 x 9 grid of the image at `h`.
+template <class A, class B>
+double maxDifferenceMm(const A& a, const B& b, int width, int height, double h) {
+  double worst = 0;
+  for (int i = 0; i <= 8; ++i)
+    for (int j = 0; j <= 8; ++j) {
+      const vgr::vision::PixelPoint p{(width - 1) * i / 8.0, (height - 1) * j / 8.0};
+      const auto qa = a(p, h), qb = b(p, h);
+      if (!qa || !qb) return 1e9;
+      worst = std::max(worst, std::sqrt((qa->x - qb->x) * (qa->x - qb->x) + (qa->y - qb->y) * (qa->y - qb->y) +
+                                        (qa->z - qb->z) * (qa->z - qb->z)));
+    }
+  return worst;
+}
+
+TEST(calib_sim_cell, ScriptCalibratesTheCellFromEmulatorFramesToTheTrueCamera) {
+  const fs::path out = fs::temp_directory_path() / ("vgr-calib-sim-" + std::to_string(::getpid()));
+  fs::remove_all(out);
+  const std::string cmd = "BIN_DIR=" + std::string(VGR_BIN_DIR) + " " + VGR_SOURCE_DIR + "/scripts/calibrate-sim-cell.sh " +
+                          out.string() + " > " + out.string() + ".log 2>&1";
+  const int st = std::system(cmd.c_str());
+  std::ifstream logIn(out.string() + ".log");
+  const std::string log((std::istreambuf_iterator<char>(logIn)), std::istreambuf_iterator<char>());
+  ASSERT_TRUE(WIFEXITED(st) && WEXITSTATUS(st) == 0) << log;
+
+  auto cfg = vgr::config::parseCellConfig(vgr::config::embeddedSimCellYaml(), "embedded");
+  ASSERT_TRUE(cfg.has_value());
+  const auto& m = cfg->model;
+  const vgr::vision::PinholePlaneModel truth(
+      m.fx, m.fy, m.cx, m.cy, vgr::vision::PinholePlaneModel::downLookingCamera(m.camX, m.camY, m.camZ, m.camRzDeg), m.planeZ);
+
+  // Intrinsics: the issue's bar (focal within 0.1 %, principal point within 0.5 px).
+  auto cam = calib::readIntrinsics((out / "intrinsics.yaml").string());
+  ASSERT_TRUE(cam.has_value()) << cam.error().message;
+  EXPECT_LT(std::abs(cam->cameraMatrix(0, 0) / m.fx - 1), 1e-3) << cam->cameraMatrix(0, 0);
+  EXPECT_LT(std::abs(cam->cameraMatrix(1, 1) / m.fy - 1), 1e-3) << cam->cameraMatrix(1, 1);
+  EXPECT_LT(std::hypot(cam->cameraMatrix(0, 2) - m.cx, cam->cameraMatrix(1, 2) - m.cy), 0.5);
+
+  // Hand-eye: X is the camera mount, within the issue's 0.5 mm / 0.05 deg.
+  auto he = calib::readHandEye((out / "handeye.yaml").string());
+  ASSERT_TRUE(he.has_value()) << he.error().message;
+  EXPECT_LT(std::hypot(he->x.x - m.camX, he->x.y - m.camY, he->x.z - m.camZ), 0.5)
+      << he->x.x << " " << he->x.y << " " << he->x.z;
+  const auto mount = vgr::vision::PinholePlaneModel::downLookingCamera(m.camX, m.camY, m.camZ, m.camRzDeg);
+  const auto d = vgr::vision::se3::toIso(mount).inverse() * vgr::vision::se3::toIso(he->x);
+  EXPECT_LT(vgr::vision::se3::rotationAngleDeg(d.linear()), 0.05);
+
+  // Mapping: every pixel of the image to the belt and to 25 mm above it. 0.1 mm = 0.2 px
+  // at 0.5 mm/px; the demo's bar is 0.5 mm.
+  auto made = calib::loadCellCalibration((out / "intrinsics.yaml").string(), (out / "handeye.yaml").string(),
+                                         (out / "plane.yaml").string());
+  ASSERT_TRUE(made.has_value()) << made.error().message;
+  auto viaFiles = [&](vgr::vision::PixelPoint p, double h) { return made->pixelToRobot(p, h); };
+  auto viaTruth = [&](vgr::vision::PixelPoint p, double h) { return truth.pixelToPlane(p, h); };
+  const double atBelt = maxDifferenceMm(viaFiles, viaTruth, cfg->sim.width, cfg->sim.height, 0);
+  const double at25 = maxDifferenceMm(viaFiles, viaTruth, cfg->sim.width, cfg->sim.height, 25);
+  std::printf("calibrated mapping vs the true camera: max %.3f mm at the belt, %.3f mm at 25 mm\n", atBelt, at25);
+  EXPECT_LT(atBelt, 0.1);
+  EXPECT_LT(at25, 0.1);
+
+  // The committed example files are what the script makes (deterministic up to float noise).
+  const fs::path committed = fs::path(VGR_SOURCE_DIR) / "config/examples/sim-calib";
+  auto example = calib::loadCellCalibration((committed / "intrinsics.yaml").string(), (committed / "handeye.yaml").string(),
+                                            (committed / "plane.yaml").string());
+  ASSERT_TRUE(example.has_value()) << example.error().message;
+  auto viaExample = [&](vgr::vision::PixelPoint p, double h) { return example->pixelToRobot(p, h); };
+  EXPECT_LT(maxDifferenceMm(viaExample, viaFiles, cfg->sim.width, cfg->sim.height, 0), 0.01)
+      << "config/examples/sim-calib is stale: run scripts/calibrate-sim-cell.sh";
+  fs::remove_all(out);
+  fs::remove(out.string() + ".log");
+}
+
+}  // namespace
