@@ -104,8 +104,8 @@ TEST(locate_adk_table1, AdkAheadOfProsacAndRansacOnMultiHeightPartsWithDecoys) {
 
   // Measured on this set (200 images, seed 11): match TP orb-adk 0.9998, orb-prosac 0.9992,
   // orb-ransac 0.9998; grasp TP 0.310, 0.205, 0.095. The same set through `vgr eval` (other
-  // FLANN LSH hash tables: they are drawn from std::rand, whose state depends on what ran
-  // before) gave grasp TP 0.265, 0.21, 0.07; four 200-image sets (seeds 7 and 11, with and
+  // FLANN LSH hash tables: they are shuffled with cv::theRNG(), whose state depends on what
+  // ran before) gave grasp TP 0.265, 0.21, 0.07; four 200-image sets (seeds 7 and 11, with and
   // without decoys) gave orb-adk ahead of orb-prosac by 5.5-10.5 points and of orb-ransac by
   // 16.5-22.5 points. The bars below leave about half of the smallest gap as room.
   EXPECT_GT(adk.matches, 2000);
