@@ -67,7 +67,7 @@ TEST(locate_adk_table1, AdkAheadOfProsacAndRansacOnMultiHeightPartsWithDecoys) {
 
   std::vector<Tally> tally(methods.size());
   cv::Mat img;
-  constexpr int kImages = 200;
+  constexpr int kImages = 150;  // ~18 s CPU
   for (int i = 0; i < kImages; ++i) {
     const auto scene = r.sample(static_cast<std::uint64_t>(i));
     ASSERT_EQ(scene.parts.size(), 1u);
@@ -102,12 +102,13 @@ TEST(locate_adk_table1, AdkAheadOfProsacAndRansacOnMultiHeightPartsWithDecoys) {
                 tally[k].matches, tally[k].graspRate());
   const Tally &adk = tally[0], &prosac = tally[1], &ransac = tally[2];
 
-  // Measured on this set (200 images, seed 11): match TP orb-adk 0.9998, orb-prosac 0.9992,
-  // orb-ransac 0.9998; grasp TP 0.310, 0.205, 0.095. The same set through `vgr eval` (other
-  // FLANN LSH hash tables: they are shuffled with cv::theRNG(), whose state depends on what
-  // ran before) gave grasp TP 0.265, 0.21, 0.07; four 200-image sets (seeds 7 and 11, with and
-  // without decoys) gave orb-adk ahead of orb-prosac by 5.5-10.5 points and of orb-ransac by
-  // 16.5-22.5 points. The bars below leave about half of the smallest gap as room.
+  // Measured on this set (the first 150 images of seed 11): match TP orb-adk 0.9998,
+  // orb-prosac 0.9996, orb-ransac 1.0000; grasp TP 0.313, 0.213, 0.067 (all 200 images:
+  // 0.310, 0.205, 0.095). The 200 images through `vgr eval` (other FLANN LSH hash tables:
+  // they are shuffled with cv::theRNG(), whose state depends on what ran before) gave grasp
+  // TP 0.265, 0.21, 0.07; four 200-image sets (seeds 7 and 11, with and without decoys) gave
+  // orb-adk ahead of orb-prosac by 5.5-10.5 points and of orb-ransac by 16.5-22.5 points.
+  // The bars below leave about half of the smallest gap as room.
   EXPECT_GT(adk.matches, 2000);
   EXPECT_GE(adk.matchRate(), 0.98);
   EXPECT_GT(adk.graspRate(), prosac.graspRate() + 0.03);
