@@ -247,6 +247,7 @@ LocateCommands::LocateCommands(CLI::App& app) : state_(std::make_unique<State>()
   s.render->add_option("--blur", d.scene.blurSigma, "Gaussian blur sigma, px")->check(CLI::Range(0.0, 10.0));
   s.render->add_option("--illum-ratio", d.scene.illumRatio, "lighting gradient, brightest : darkest (1 = even)")->check(CLI::Range(1.0, 10.0));
   s.render->add_option("--clutter", d.scene.clutter, "distractor shapes per image")->check(CLI::Range(0, 64));
+  s.render->add_option("--decoys", d.scene.decoys, "pieces of the part's own faces lying on the belt, per image")->check(CLI::Range(0, 16));
   s.render->add_option("--parts", d.scene.partsPerImage, "parts per non-empty image")->check(CLI::Range(1, 16));
   s.render->add_option("--empty-ratio", d.scene.emptyRatio, "share of images without a part")->check(CLI::Range(0.0, 1.0));
   s.render->add_option("--width", d.scene.width, "image width, px")->check(CLI::Range(64, 2448));

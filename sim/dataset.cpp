@@ -64,11 +64,11 @@ Result<DatasetSummary> writeDataset(const DatasetOptions& o) {
       "# How this dataset was made (vgr sim render); truth is in truth.csv.\n"
       "part: {}\nlevels: {}\ncount: {}\nseed: {}\nwidth: {}\nheight: {}\n"
       "angle_range_deg: {}\nparts_per_image: {}\nempty_ratio: {}\nclutter: {}\nnoise_sigma: {}\n"
-      "blur_sigma: {}\nillum_ratio: {}\n"
+      "blur_sigma: {}\nillum_ratio: {}\ndecoys: {}\n"
       "# Pinhole camera looking straight down; base frame origin on the plane under the optical centre.\n"
       "camera: {{fx: {:.4f}, fy: {:.4f}, cx: {:.2f}, cy: {:.2f}, height_mm: {}}}\n",
       o.part, o.part == "flat" ? 1 : o.levels, o.count, s.seed, s.width, s.height, s.angleRangeDeg, s.partsPerImage,
-      s.emptyRatio, s.clutter, s.noiseSigma, s.blurSigma, s.illumRatio, renderer.focalPx(), renderer.focalPx(),
+      s.emptyRatio, s.clutter, s.noiseSigma, s.blurSigma, s.illumRatio, s.decoys, renderer.focalPx(), renderer.focalPx(),
       (s.width - 1) / 2.0, (s.height - 1) / 2.0, s.cameraHeightMm);
   if (auto w = writeText(dir / "dataset.yaml", ds); !w) return std::unexpected(w.error());
 

@@ -333,6 +333,110 @@ void PartSceneRenderer::drawPart(const PlacedPart& p, cv::Mat& dst) const {
   }
 }
 
+void PartSceneRenderer::drawDecoys(const PartScene& scene, cv::Mat& dst) const {
+  // An RNG of its own, so that datasets without decoys render exactly as before.
+  std::mt19937_64 rng(options_.seed * 0x9FB21C651E98DF25ull + scene.index * 0xC2B2AE3D27D4EB4Full + 17);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<cv::Rect2d> taken;
+  for (const auto& p : scene.parts) {
+    const cv::Rect2d b = footprint(camera_, part_, p);
+    taken.emplace_back(b.x - 6, b.y - 6, b.width + 12, b.height + 12);
+  }
+  // Source layers drawn in proportion to their top-face area (the base plate most often).
+  std::vector<double> area;
+  for (const auto& l : part_.layers) {
+    std::vector<cv::Point2f> poly;
+    for (const auto& q : l.outline) poly.emplace_back(static_cast<float>(q.x), static_cast<float>(q.y));
+    area.push_back(cv::contourArea(poly));
+  }
+  std::discrete_distribution<std::size_t> pickLayer(area.begin(), area.end());
+  const cv::Rect2d image(0, 0, options_.width - 1, options_.height - 1);
+  const cv::Rect imageRect(0, 0, dst.cols, dst.rows);
+  const int decoys = std::clamp(options_.decoys, 0, 16);
+  for (int k = 0; k < decoys; ++k) {
+    for (int attempt = 0; attempt < 100; ++attempt) {
+      const std::size_t li = pickLayer(rng);
+      const PartLayer& layer = part_.layers[li];
+      const Sheet& sheet = *sheets_[li];
+      // The piece: a convex polygon of 5-8 corners about a point of the face (part frame, mm).
+      double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9;
+      std::vector<cv::Point2f> outline;
+      for (const auto& q : layer.outline) {
+        outline.emplace_back(static_cast<float>(q.x), static_cast<float>(q.y));
+        x0 = std::min(x0, q.x), y0 = std::min(y0, q.y), x1 = std::max(x1, q.x), y1 = std::max(y1, q.y);
+      }
+      const PointMm c{x0 + unit(rng) * (x1 - x0), y0 + unit(rng) * (y1 - y0)};
+      if (cv::pointPolygonTest(outline, cv::Point2f(static_cast<float>(c.x), static_cast<float>(c.y)), false) < 0) continue;
+      const double r = (0.2 + 0.2 * unit(rng)) * part_.radiusMm;
+      const int corners = 5 + static_cast<int>(unit(rng) * 4);
+      const double a0 = unit(rng) * 2 * M_PI;
+      Polygon piece;
+      for (int i = 0; i < corners; ++i) {
+        const double a = a0 + 2 * M_PI * (i + 0.3 * unit(rng)) / corners, rr = r * (0.6 + 0.4 * unit(rng));
+        piece.push_back({c.x + rr * std::cos(a), c.y + rr * std::sin(a)});
+      }
+      // Lying flat: its top face at its own thickness, turned anywhere, its centre anywhere.
+      const double top = std::max(0.0, layer.topMm - layer.baseMm);
+      const auto at = camera_.pixelToPlane({unit(rng) * (options_.width - 1), unit(rng) * (options_.height - 1)}, top);
+      if (!at) continue;
+      PlacedPart pose;
+      pose.rzDeg = (2 * unit(rng) - 1) * 180;
+      const double cs = std::cos(pose.rzDeg * kDegToRad), sn = std::sin(pose.rzDeg * kDegToRad);
+      pose.xMm = at->x - (cs * c.x - sn * c.y);
+      pose.yMm = at->y - (sn * c.x + cs * c.y);
+      double bx0 = 1e18, by0 = 1e18, bx1 = -1e18, by1 = -1e18;
+      for (const auto& q : piece)
+        for (double h : {0.0, top}) {
+          const cv::Point2d a = projectPart(camera_, pose, q, h);
+          bx0 = std::min(bx0, a.x), by0 = std::min(by0, a.y), bx1 = std::max(bx1, a.x), by1 = std::max(by1, a.y);
+        }
+      const cv::Rect2d box(bx0, by0, bx1 - bx0, by1 - by0);
+      if ((box & image) != box) continue;
+      if (std::any_of(taken.begin(), taken.end(), [&](const cv::Rect2d& t) { return (t & box).area() > 0; })) continue;
+      taken.emplace_back(box.x - 4, box.y - 4, box.width + 8, box.height + 8);
+
+      // The piece's cut edges as a dark wall (its outline on the belt, under the top face),
+      // then its top: the face's own texture inside the piece, mapped like drawPart's faces.
+      constexpr int kShift = 4;
+      const std::vector<cv::Point> sheetPoly = toSheet(piece, sheet.scale, sheet.half);
+      cv::Rect sub = cv::boundingRect(sheetPoly);
+      sub = cv::Rect(sub.x / (1 << kShift) - 2, sub.y / (1 << kShift) - 2, sub.width / (1 << kShift) + 5,
+                     sub.height / (1 << kShift) + 5) &
+            cv::Rect(0, 0, sheet.tex.cols, sheet.tex.rows);
+      if (sub.empty()) continue;
+      cv::Mat pieceMask = cv::Mat::zeros(sheet.mask.size(), CV_8UC1);
+      cv::fillPoly(pieceMask, std::vector<std::vector<cv::Point>>{sheetPoly}, cv::Scalar(255), cv::LINE_AA, kShift);
+      cv::min(pieceMask(sub), sheet.mask(sub), pieceMask);
+      const cv::Mat wall(sub.size(), CV_8UC1, cv::Scalar(95));
+      for (const auto& [h, src] : {std::pair{0.0, wall}, std::pair{top, cv::Mat(sheet.tex(sub))}}) {
+        std::vector<cv::Point2f> from, to;
+        for (const auto& [i, j] : {std::pair{0, 0}, std::pair{sub.width - 1, 0}, std::pair{sub.width - 1, sub.height - 1},
+                                   std::pair{0, sub.height - 1}}) {
+          const PointMm q{(sub.x + i + 0.5) / sheet.scale - sheet.half, sheet.half - (sub.y + j + 0.5) / sheet.scale};
+          const cv::Point2d a = projectPart(camera_, pose, q, h);
+          from.emplace_back(static_cast<float>(i), static_cast<float>(j));
+          to.emplace_back(static_cast<float>(a.x), static_cast<float>(a.y));
+        }
+        const cv::Rect dbox = cv::boundingRect(to) & imageRect;
+        if (dbox.empty()) continue;
+        const cv::Mat hm = (cv::Mat_<double>(3, 3) << 1, 0, -dbox.x, 0, 1, -dbox.y, 0, 0, 1) * cv::getPerspectiveTransform(from, to);
+        cv::Mat tex, mask;
+        cv::warpPerspective(src, tex, hm, dbox.size(), cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
+        cv::warpPerspective(pieceMask, mask, hm, dbox.size(), cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
+        cv::Mat roi = dst(dbox);
+        for (int y = 0; y < roi.rows; ++y) {
+          auto* rw = roi.ptr<std::uint8_t>(y);
+          const auto* t = tex.ptr<std::uint8_t>(y);
+          const auto* m = mask.ptr<std::uint8_t>(y);
+          for (int x = 0; x < roi.cols; ++x)
+            if (m[x]) rw[x] = static_cast<std::uint8_t>((rw[x] * (255 - m[x]) + t[x] * m[x] + 127) / 255);
+        }
+      }
+      break;
+    }
+  }
+}
+
 void PartSceneRenderer::render(const PartScene& scene, cv::Mat& dst) const {
   dst.create(options_.height, options_.width, CV_8UC1);
   dst.setTo(cv::Scalar(options_.background));
@@ -370,6 +474,7 @@ void PartSceneRenderer::render(const PartScene& scene, cv::Mat& dst) const {
     }
   }
 
+  if (options_.decoys > 0) drawDecoys(scene, dst);
   for (const auto& p : scene.parts) drawPart(p, dst);
 
   cv::Mat f;

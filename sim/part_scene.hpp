@@ -75,6 +75,10 @@ struct PartSceneOptions {
   std::uint8_t background = 30;     // conveyor gray level
   int marginPx = 8;                 // every part stays this far inside the image
   std::uint64_t seed = 1;
+  // Same-texture decoys (the harder set, docs/datasets.md): [0, 16] pieces cut from the
+  // part's own top faces (same machining grain, same marks), 0.2-0.4 part radii across,
+  // lying flat on the belt at random poses, never on a part. Not parts: not in the truth.
+  int decoys = 0;
 };
 
 // A part's pose on the conveyor and its truth in the image.
@@ -129,6 +133,8 @@ class PartSceneRenderer {
  private:
   struct Sheet;  // a layer's top face as a texture in part coordinates
   void drawPart(const PlacedPart& p, cv::Mat& dst) const;
+  // PartSceneOptions::decoys pieces of the part's faces, clear of the scene's parts.
+  void drawDecoys(const PartScene& scene, cv::Mat& dst) const;
 
   PartModel part_;
   PartSceneOptions options_;

@@ -90,4 +90,40 @@ TEST(locate_scene, LightingGradientHasTheRequestedRatio) {
   EXPECT_NEAR(hi / lo, 2.0, 0.05);
 }
 
+// Decoys (pieces of the part's own faces, docs/datasets.md) land only off the parts, change
+// nothing else, and are deterministic in the seed.
+TEST(locate_scene, DecoysLieOffThePartsAndAreDeterministic) {
+  PartSceneOptions o = small();
+  o.width = 1280;
+  o.height = 1024;
+  o.partsPerImage = 2;
+  const PartSceneRenderer plain(PartModel::multi(3), o);
+  o.decoys = 6;
+  const PartSceneRenderer decoy(PartModel::multi(3), o);
+  for (std::uint64_t i = 0; i < 4; ++i) {
+    const PartScene s = decoy.sample(i);
+    ASSERT_FALSE(s.parts.empty());
+    EXPECT_EQ(plain.sample(i).parts.size(), s.parts.size());  // the poses do not depend on decoys
+    cv::Mat a, b, again;
+    plain.render(s, a);
+    decoy.render(s, b);
+    decoy.render(s, again);
+    EXPECT_EQ(cv::norm(b, again, cv::NORM_INF), 0.0) << i;
+    cv::Mat changed = a != b;
+    // Decoys cover some of the belt: at least a piece 0.2 part radii across (~20 px) in all.
+    EXPECT_GT(cv::countNonZero(changed), 400) << i;
+    // ... but never a pixel of a part's footprint (its top faces through the camera).
+    for (const auto& p : s.parts) {
+      const auto g = decoy.camera().project({p.xMm, p.yMm, 0});
+      ASSERT_TRUE(g);
+      const double rPx = decoy.part().radiusMm * decoy.focalPx() / (o.cameraHeightMm - 50);
+      cv::Mat disc = cv::Mat::zeros(changed.size(), CV_8UC1);
+      cv::circle(disc, cv::Point(cvRound(g->u), cvRound(g->v)), static_cast<int>(rPx * 0.5), cv::Scalar(255), cv::FILLED);
+      cv::Mat inside;
+      cv::bitwise_and(changed, disc, inside);
+      EXPECT_EQ(cv::countNonZero(inside), 0) << "image " << i;
+    }
+  }
+}
+
 }  // namespace
