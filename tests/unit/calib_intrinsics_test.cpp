@@ -252,7 +252,14 @@ TEST(calib_intrinsics, charuco_bad_input_is_named) {
   smaller.cols = 7;
   smaller.rows = 5;
   const auto s = vision::calib::detectPattern(charucoImg, smaller, "small.png");
+  EXPECT_FALSE(s.found);
   EXPECT_NE(s.note.find("ids beyond this board"), std::string::npos) << s.note;
+  // A wider board: the same marker ids, elsewhere; the layout check refuses it.
+  PatternSpec wider = spec;
+  wider.cols = 13;
+  const auto w = vision::calib::detectPattern(charucoImg, wider, "wide.png");
+  EXPECT_FALSE(w.found);
+  EXPECT_NE(w.note.find("do not fit a 13x8 board"), std::string::npos) << w.note;
   // Never found in any view: the error lists every view with its reason.
   std::vector<ViewDetection> none{vision::calib::detectPattern(blank, spec, "a.png"),
                                   vision::calib::detectPattern(chessImg, spec, "b.png")};

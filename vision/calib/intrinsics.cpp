@@ -236,7 +236,43 @@ void detectCharuco(const cv::Mat& gray, const PatternSpec& spec, ViewDetection& 
     d.note = fmt::format("no {} marker found", spec.dictionary);
     return;
   }
+  if (foreign) {
+    // Not this board (a wrong --cols/--rows is the usual cause): its corners would get wrong ids.
+    d.note = fmt::format("{} of {} markers have ids beyond this board's {}: not a {}x{} board (--cols/--rows count "
+                         "inner corners, i.e. squares - 1)",
+                         foreign, markerIds.size(), onBoard, spec.cols, spec.rows);
+    return;
+  }
   cv::aruco::refineDetectedMarkers(gray, b->board, markerCorners, markerIds, rejected);
+  // The markers must sit where this board has them: one homography from the plate to the
+  // image explains them to a few px (lens distortion) when --cols/--rows/--square/--marker
+  // are right; a different layout with the same ids is off by about a square.
+  if (markerIds.size() >= 4) {
+    std::vector<cv::Point2f> plate, image;
+    double side = 0;
+    for (std::size_t m = 0; m < markerIds.size(); ++m) {
+      const auto& obj = b->board->objPoints.at(static_cast<std::size_t>(markerIds[m]));
+      for (int k = 0; k < 4; ++k) {
+        plate.push_back(boardToPlate(*b, spec, obj[static_cast<std::size_t>(k)]));
+        image.push_back(markerCorners[m][static_cast<std::size_t>(k)]);
+      }
+      side += cv::norm(markerCorners[m][1] - markerCorners[m][0]) / static_cast<double>(markerIds.size());
+    }
+    const cv::Mat h = cv::findHomography(plate, image, 0);
+    if (!h.empty()) {
+      std::vector<cv::Point2f> mapped;
+      cv::perspectiveTransform(plate, mapped, h);
+      std::vector<double> res;
+      for (std::size_t k = 0; k < mapped.size(); ++k) res.push_back(cv::norm(mapped[k] - image[k]));
+      const double med = median(res);
+      if (med > std::max(5.0, 0.2 * side)) {
+        d.note = fmt::format("the {} markers do not fit a {}x{} board with {} mm squares and {} mm markers (median "
+                             "misfit {:.1f} px): check --cols/--rows/--square/--marker",
+                             markerIds.size(), spec.cols, spec.rows, spec.pitchMm, spec.markerMm, med);
+        return;
+      }
+    }
+  }
   std::vector<cv::Point2f> corners;
   std::vector<int> ids;
   if (cv::aruco::interpolateCornersCharuco(markerCorners, markerIds, gray, b->board, corners, ids) > 0) {
@@ -264,14 +300,9 @@ void detectCharuco(const cv::Mat& gray, const PatternSpec& spec, ViewDetection& 
       d.corners.push_back(one[0]);
     }
   }
-  const std::string foreignNote =
-      foreign ? fmt::format("; {} marker(s) with ids beyond this board's {} (--cols/--rows count inner corners, i.e. "
-                            "squares - 1)",
-                            foreign, onBoard)
-              : "";
   if (static_cast<int>(d.corners.size()) < kMinCharucoCorners) {
-    d.note = fmt::format("{} markers, {} charuco corners (at least {} needed){}", markerIds.size(), d.corners.size(),
-                         kMinCharucoCorners, foreignNote);
+    d.note = fmt::format("{} markers, {} charuco corners (at least {} needed)", markerIds.size(), d.corners.size(),
+                         kMinCharucoCorners);
     return;
   }
   // Corners on one line say nothing about the plate's pose.
@@ -282,7 +313,6 @@ void detectCharuco(const cv::Mat& gray, const PatternSpec& spec, ViewDetection& 
     return;
   }
   d.found = true;
-  d.note = foreign ? foreignNote.substr(2) : "";
 }
 
 }  // namespace
