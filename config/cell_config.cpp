@@ -372,6 +372,11 @@ void parseSim(Section s, SimConfig& c) {
   s.read<int>("height", c.height, inRange(64, 2048), "[64, 2048]");
   s.read<double>("noise_sigma", c.noiseSigma, inRange(0.0, 64.0), "[0, 64]");
   s.read<std::string>("serial", c.serial);
+  s.read<std::string>("scene", c.scene, oneOf({"plate", "part", "multi"}), "one of: plate, part, multi");
+  s.read<int>("levels", c.levels, inRange(2, 4), "[2, 4]");
+  s.read<double>("angle_range_deg", c.angleRangeDeg, inRange(0.0, 180.0), "[0, 180]");
+  s.read<int>("parts", c.parts, inRange(1, 16), "[1, 16]");
+  s.read<int>("clutter", c.clutter, inRange(0, 64), "[0, 64]");
   s.finish();
 }
 

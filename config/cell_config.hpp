@@ -152,6 +152,14 @@ struct SimConfig {
   int width = 1280, height = 1024;  // px
   double noiseSigma = 2.0;          // gray levels
   std::string serial = "VGR-SIM-0";
+  // What the emulator shows: `plate` (the skeleton's flat plate, SceneRenderer), `part` (the
+  // same part textured, with holes and marks) or `multi` (a part with `levels` height levels),
+  // both from PartSceneRenderer, the dataset renderer (docs/datasets.md).
+  std::string scene = "plate";
+  int levels = 3;                // [2, 4], multi only
+  double angleRangeDeg = 180;    // part/multi: rotation drawn in [-range, range], deg
+  int parts = 1;                 // part/multi: parts per image, [1, 16]
+  int clutter = 0;               // part/multi: distractor shapes per image, [0, 64]
 };
 
 // Calibration files (docs/calibration.md) vgrd maps pixels with instead of `model`. Paths

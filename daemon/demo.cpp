@@ -18,7 +18,7 @@
 
 #include "config/cell_config.hpp"
 #include "daemon/process.hpp"
-#include "sim/scene.hpp"
+#include "sim/cell_scenes.hpp"
 
 namespace vgr::daemon {
 namespace fs = std::filesystem;
@@ -231,7 +231,7 @@ int runDemo(const DemoOptions& o) {
       }
     }
   }
-  const sim::SceneRenderer renderer = sim::SceneRenderer::fromCellConfig(*cfg);
+  const sim::CellScenes scenes(*cfg);
   int ok = 0;
   double maxPos = 0, maxAng = 0;
   std::vector<double> latencies;
@@ -251,9 +251,15 @@ int runDemo(const DemoOptions& o) {
       continue;
     }
     const auto frameId = jit->second.value("frame_id", std::uint64_t{0});
-    const sim::SceneTruth t = renderer.truthForFrame(frameId);
-    const double pos = std::hypot(p.value("x", 0.0) - t.xMm, p.value("y", 0.0) - t.yMm);
-    const double ang = angleDiffDeg(p.value("r3", 0.0), t.rzDeg);
+    // The PLC gets the first part: score it against the nearest part of the frame.
+    double pos = 1e9, ang = 180;
+    for (const auto& t : scenes.truth(frameId)) {
+      const double d = std::hypot(p.value("x", 0.0) - t.xMm, p.value("y", 0.0) - t.yMm);
+      if (d < pos) {
+        pos = d;
+        ang = angleDiffDeg(p.value("r3", 0.0), t.rzDeg);
+      }
+    }
     maxPos = std::max(maxPos, pos);
     maxAng = std::max(maxAng, ang);
     ++ok;

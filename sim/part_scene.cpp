@@ -7,6 +7,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "config/cell_config.hpp"
 #include "core/angles.hpp"
 
 namespace vgr::sim {
@@ -142,8 +143,11 @@ PartSceneRenderer::PartSceneRenderer(PartModel part, PartSceneOptions options)
     : part_(std::move(part)),
       options_(options),
       focal_(options.focalPx > 0 ? options.focalPx : 1000.0 * options.width / 1280.0),
-      camera_(focal_, focal_, (options.width - 1) / 2.0, (options.height - 1) / 2.0,
-              vision::PinholePlaneModel::downLookingCamera(0, 0, options.cameraHeightMm, 0), 0.0) {
+      camera_(focal_, focal_, options.cxPx >= 0 ? options.cxPx : (options.width - 1) / 2.0,
+              options.cyPx >= 0 ? options.cyPx : (options.height - 1) / 2.0,
+              vision::PinholePlaneModel::downLookingCamera(options.cameraXMm, options.cameraYMm, options.cameraHeightMm,
+                                                          options.cameraRzDeg),
+              0.0) {
   double top = 0;
   for (const auto& l : part_.layers) top = std::max(top, l.topMm);
   const double pxPerMm = focal_ / std::max(1.0, options_.cameraHeightMm - top);
@@ -182,6 +186,26 @@ PartSceneRenderer::PartSceneRenderer(PartModel part, PartSceneOptions options)
   }
 }
 
+PartSceneRenderer PartSceneRenderer::fromCellConfig(const config::CellConfig& c) {
+  const auto& m = c.model;
+  PartSceneOptions o;
+  o.width = c.sim.width;
+  o.height = c.sim.height;
+  o.focalPx = m.fx;
+  o.cxPx = m.cx;
+  o.cyPx = m.cy;
+  o.cameraXMm = m.camX;
+  o.cameraYMm = m.camY;
+  o.cameraHeightMm = m.camZ - m.planeZ;
+  o.cameraRzDeg = m.camRzDeg;
+  o.angleRangeDeg = c.sim.angleRangeDeg;
+  o.partsPerImage = c.sim.parts;
+  o.clutter = c.sim.clutter;
+  o.noiseSigma = c.sim.noiseSigma;
+  o.seed = c.sim.seed;
+  return PartSceneRenderer(c.sim.scene == "multi" ? PartModel::multi(c.sim.levels) : PartModel::flat(), o);
+}
+
 PlacedPart PartSceneRenderer::place(double xMm, double yMm, double rzDeg) const {
   PlacedPart p;
   p.xMm = xMm;
@@ -194,8 +218,9 @@ PlacedPart PartSceneRenderer::place(double xMm, double yMm, double rzDeg) const 
   // The image direction of the part's +x axis at the grasp height, minus the template's
   // (rz = 0 under the optical axis): the rotation as displayed.
   const auto tip = camera_.project({xMm + c * (g.x + 10) - s * g.y, yMm + s * (g.x + 10) + c * g.y, h});
-  const auto t0 = camera_.project({g.x, g.y, h});
-  const auto t1 = camera_.project({g.x + 10, g.y, h});
+  const double x0 = options_.cameraXMm, y0 = options_.cameraYMm;
+  const auto t0 = camera_.project({x0 + g.x, y0 + g.y, h});
+  const auto t1 = camera_.project({x0 + g.x + 10, y0 + g.y, h});
   if (px && tip && t0 && t1) {
     p.uPx = px->u;
     p.vPx = px->v;
@@ -372,7 +397,7 @@ void PartSceneRenderer::render(const PartScene& scene, cv::Mat& dst) const {
 
 PartTemplate PartSceneRenderer::renderTemplate(cv::Mat& dst) const {
   PartScene scene;
-  scene.parts.push_back(place(0, 0, 0));
+  scene.parts.push_back(place(options_.cameraXMm, options_.cameraYMm, 0));
   cv::Mat full(options_.height, options_.width, CV_8UC1, cv::Scalar(options_.background));
   drawPart(scene.parts.front(), full);
   const cv::Rect2d fp = footprint(camera_, part_, scene.parts.front());

@@ -25,6 +25,10 @@ namespace cv {
 class Mat;
 }
 
+namespace vgr::config {
+struct CellConfig;
+}
+
 namespace vgr::sim {
 
 using Polygon = std::vector<PointMm>;  // part frame, mm, closed implicitly
@@ -57,6 +61,9 @@ struct PartModel {
 struct PartSceneOptions {
   int width = 1280, height = 1024;  // px
   double cameraHeightMm = 500;      // optical centre above the conveyor plane, mm
+  double cameraXMm = 0, cameraYMm = 0;  // optical centre over the plane (base frame), mm
+  double cameraRzDeg = 0;           // image x axis turned about base z (the sim cell's mount)
+  double cxPx = -1, cyPx = -1;      // principal point, px; negative = the image centre
   double focalPx = 0;               // px; 0 = 1000 * width / 1280 (the sim cell's field of view)
   double angleRangeDeg = 60;        // part rotation drawn uniformly in [-range, range], <= 180
   int partsPerImage = 1;            // [1, 16]: parts per non-empty image (fewer if they do not fit)
@@ -98,6 +105,12 @@ struct PartTemplate {
 class PartSceneRenderer {
  public:
   PartSceneRenderer(PartModel part, PartSceneOptions options);
+
+  // The textured scenes of a cell config's simulated camera (`sim.scene: part | multi`):
+  // the config's `model` is the true camera (fx = fy assumed; heights and z are
+  // then above plane_z_mm), `sim`
+  // the rest (size, noise, seed, levels, angle range, parts per image, clutter).
+  static PartSceneRenderer fromCellConfig(const config::CellConfig& cell);
 
   // Draws scene `index` (poses; deterministic in seed and index).
   PartScene sample(std::uint64_t index) const;

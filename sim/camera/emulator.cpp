@@ -25,20 +25,20 @@
 namespace vgr::sim {
 
 struct CameraEmulator::Impl {
-  SceneRenderer renderer;
+  CellScenes scenes;
   EmulatorOptions options;
   ArvGvFakeCamera* camera = nullptr;
-  cv::Mat frame, frame16, scratch;  // reused render targets (camera thread)
+  cv::Mat frame, frame16;  // reused render targets (camera thread)
   std::vector<cv::Mat> images;      // image-folder mode: CV_8UC1 or CV_16UC1, all one size
   int width = 0, height = 0;        // sensor size
   std::atomic<std::uint64_t> served{0};
   std::FILE* truth = nullptr;
   std::mutex lineMutex;
 
-  Impl(SceneRenderer r, EmulatorOptions o) : renderer(std::move(r)), options(std::move(o)) {}
+  Impl(CellScenes s, EmulatorOptions o) : scenes(std::move(s)), options(std::move(o)) {}
 
   // The full-sensor image of frame `frameId` at `depth` (CV_8U or CV_16U), and its truth.
-  const cv::Mat& source(std::uint64_t frameId, int depth, SceneTruth& t, bool& hasTruth) {
+  const cv::Mat& source(std::uint64_t frameId, int depth, std::vector<CellPartTruth>& t, bool& hasTruth) {
     if (!images.empty()) {
       hasTruth = false;
       const cv::Mat& img = images[(frameId + images.size() - 1) % images.size()];
@@ -51,12 +51,10 @@ struct CameraEmulator::Impl {
       return dst;
     }
     hasTruth = true;
-    if (depth == CV_16U) {
-      t = renderer.render16(frameId, frame16, scratch);
-      return frame16;
-    }
-    t = renderer.render(frameId, frame);
-    return frame;
+    t = scenes.render(frameId, frame);
+    if (depth != CV_16U) return frame;
+    frame.convertTo(frame16, CV_16U, 257.0);  // 8-bit level v as v * 257: full scale 65535
+    return frame16;
   }
 
   // Aravis' fake camera thread, once per frame, with the fake camera's fill-pattern mutex held.
@@ -77,7 +75,7 @@ struct CameraEmulator::Impl {
       log::warn("sim", "fill: unsupported pixel format 0x{:x} or region {}x{}+{}+{}", static_cast<unsigned>(format), w, h, x, y);
       return;
     }
-    SceneTruth t;
+    std::vector<CellPartTruth> t;
     bool hasTruth = false;
     // A gray scene is its own Bayer mosaic (R = G = B), so Bayer8 serves the Mono8 bytes.
     const cv::Mat& src = self->source(frameId, mono16 ? CV_16U : CV_8U, t, hasTruth);
@@ -85,10 +83,7 @@ struct CameraEmulator::Impl {
     for (int r = 0; r < h; ++r) std::memcpy(out + r * row, src.ptr(y + r) + static_cast<size_t>(x) * src.elemSize(), row);
     self->served++;
     if (self->truth && hasTruth) {
-      std::fprintf(self->truth,
-                   "{\"frame_id\":%llu,\"x_mm\":%.4f,\"y_mm\":%.4f,\"z_mm\":%.4f,\"rz_deg\":%.4f,"
-                   "\"u_px\":%.4f,\"v_px\":%.4f,\"angle_img_deg\":%.4f}\n",
-                   static_cast<unsigned long long>(frameId), t.xMm, t.yMm, t.zMm, t.rzDeg, t.uPx, t.vPx, t.angleImgDeg);
+      std::fprintf(self->truth, "%s\n", CellScenes::truthJson(frameId, t).c_str());
       std::fflush(self->truth);
     }
   }
@@ -117,8 +112,8 @@ struct CameraEmulator::Impl {
   }
 };
 
-CameraEmulator::CameraEmulator(SceneRenderer renderer, EmulatorOptions options)
-    : impl_(std::make_unique<Impl>(std::move(renderer), std::move(options))) {}
+CameraEmulator::CameraEmulator(CellScenes scenes, EmulatorOptions options)
+    : impl_(std::make_unique<Impl>(std::move(scenes), std::move(options))) {}
 
 CameraEmulator::~CameraEmulator() {
   if (impl_->camera) g_object_unref(impl_->camera);
@@ -180,8 +175,8 @@ Result<void> CameraEmulator::start() {
     impl_->width = impl_->images.front().cols;
     impl_->height = impl_->images.front().rows;
   } else {
-    impl_->width = impl_->renderer.options().width;
-    impl_->height = impl_->renderer.options().height;
+    impl_->width = impl_->scenes.width();
+    impl_->height = impl_->scenes.height();
   }
   if (!o.truthPath.empty()) {
     impl_->truth = std::fopen(o.truthPath.c_str(), "a");
@@ -207,7 +202,7 @@ Result<void> CameraEmulator::start() {
                                  static_cast<guint32>(1e6 / o.fps));
   arv_fake_camera_set_fill_pattern(fake, &Impl::fill, impl_.get());
   log::info("sim", "camera emulator {} serving {}x{} {} on {} (packet loss {}, free-run {} fps)", o.serial, w, h,
-            o.imagesFolder.empty() ? "rendered scenes" : "images of " + o.imagesFolder, o.address, o.lossRatio, o.fps);
+            o.imagesFolder.empty() ? "rendered '" + impl_->scenes.mode() + "' scenes" : "images of " + o.imagesFolder, o.address, o.lossRatio, o.fps);
   return {};
 }
 

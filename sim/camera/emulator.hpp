@@ -1,6 +1,7 @@
 // A GigE Vision camera on a loopback address, built on libaravis' own fake GigE camera
 // (arv_gv_fake_camera_new), serving frames over the real GVCP/GVSP protocol: rendered
-// scenes (SceneRenderer, ground truth known to tests) or the images of a folder. Frames
+// scenes (CellScenes: the plate or textured parts, ground truth known to tests) or the
+// images of a folder. Frames
 // are produced on Aravis' camera thread in the fill-pattern callback. Mono8, Mono16 and
 // the Bayer8 formats (a gray scene is its own Bayer mosaic), ROI offsets honoured.
 // Limits of Aravis 0.8.26's fake camera: no packet resend (a lost packet is a lost frame),
@@ -12,7 +13,7 @@
 #include <string>
 
 #include "core/result.hpp"
-#include "sim/scene.hpp"
+#include "sim/cell_scenes.hpp"
 
 namespace vgr::sim {
 
@@ -27,7 +28,7 @@ struct EmulatorOptions {
 
 class CameraEmulator {
  public:
-  CameraEmulator(SceneRenderer renderer, EmulatorOptions options);
+  CameraEmulator(CellScenes scenes, EmulatorOptions options);
   ~CameraEmulator();  // stops the camera thread
   CameraEmulator(const CameraEmulator&) = delete;
   CameraEmulator& operator=(const CameraEmulator&) = delete;

@@ -1,5 +1,6 @@
 // vgr-sim-camera: GigE Vision cameras on loopback serving rendered scenes with known ground
-// truth (or the images of a folder). With no arguments it serves the camera of the embedded
+// truth (or the images of a folder): the config's `sim.scene` (plate, part or multi; see
+// sim/cell_scenes.hpp). With no arguments it serves the camera of the embedded
 // example cell (config/examples/sim-cell.yaml): address 127.0.0.1, serial VGR-SIM-0, seed 1.
 // Several cameras: --camera SERIAL@ADDRESS, repeated (one address each; camera i renders
 // with seed + i). SIGUSR1 = one edge on every camera's Line0 (simulated hardware trigger).
@@ -24,7 +25,7 @@ void onPulse(int) { gPulses = gPulses + 1; }
 
 int main(int argc, char** argv) {
   CLI::App app{"vgr-sim-camera: GigE Vision camera emulator serving rendered scenes with ground truth"};
-  std::string configPath, address, serial, truthPath, imagesFolder;
+  std::string configPath, address, serial, truthPath, imagesFolder, scene;
   std::vector<std::string> cameraSpecs;
   long long seed = -1;
   int width = 0, height = 0;
@@ -38,6 +39,8 @@ int main(int argc, char** argv) {
   app.add_option("--height", height, "sensor height in px (default: the config's sim.height)")->check(CLI::Range(64, 2048));
   app.add_option("--loss", loss, "probability that a GVSP packet is dropped, e.g. 1e-4")->check(CLI::Range(0.0, 1.0));
   app.add_option("--fps", fps, "free-run frame rate")->check(CLI::Range(0.1, 1000.0));
+  app.add_option("--scene", scene, "what to show: plate, part (textured) or multi (height levels) (default: the config's sim.scene)")
+      ->check(CLI::IsMember({"plate", "part", "multi"}));
   app.add_option("--images", imagesFolder, "serve the images of this folder (name order, looping) instead of scenes");
   app.add_option("--truth", truthPath, "append one JSON line of ground truth per served frame to this file (first camera)");
   CLI11_PARSE(app, argc, argv);
@@ -51,6 +54,7 @@ int main(int argc, char** argv) {
   if (seed >= 0) cfg->sim.seed = static_cast<std::uint64_t>(seed);
   if (width > 0) cfg->sim.width = width;
   if (height > 0) cfg->sim.height = height;
+  if (!scene.empty()) cfg->sim.scene = scene;
 
   std::vector<vgr::sim::EmulatorOptions> cams;
   if (cameraSpecs.empty()) {
@@ -80,7 +84,7 @@ int main(int argc, char** argv) {
     if (i == 0) o.truthPath = truthPath;
     auto cell = *cfg;
     cell.sim.seed = cfg->sim.seed + i;
-    emulators.push_back(std::make_unique<vgr::sim::CameraEmulator>(vgr::sim::SceneRenderer::fromCellConfig(cell), o));
+    emulators.push_back(std::make_unique<vgr::sim::CameraEmulator>(vgr::sim::CellScenes(cell), o));
     if (auto r = emulators.back()->start(); !r) {
       std::fprintf(stderr, "vgr-sim-camera: %s\n", r.error().message.c_str());
       return 1;

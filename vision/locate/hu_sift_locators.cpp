@@ -187,6 +187,7 @@ struct SiftParams {
   int minMatches = 20;       // paper 002: at least 20 good matches
   int trees = 5, checks = 10;  // FLANN kd-tree (paper 002)
   double ransacPx = 3.0;     // homography inlier distance, px
+  bool rigidPose = true;     // pose from a similarity through the inliers (else the homography's)
 };
 
 class SiftLocator final : public Locator {
@@ -195,6 +196,7 @@ class SiftLocator final : public Locator {
       : p_(p), taught_(taught), sift_(cv::SIFT::create(p.features)),
         matcher_(cv::makePtr<cv::flann::KDTreeIndexParams>(p.trees), cv::makePtr<cv::flann::SearchParams>(p.checks)) {
     sift_->detectAndCompute(templ, cv::noArray(), tplKeys_, tplDesc_);
+    centreKeypoints(tplKeys_);
     tplSize_ = templ.size();
     if (!tplDesc_.empty()) {
       matcher_.add(std::vector<cv::Mat>{tplDesc_});
@@ -202,6 +204,15 @@ class SiftLocator final : public Locator {
     }
   }
   std::string_view method() const override { return "sift"; }
+
+  // OpenCV's SIFT doubles the image first (bilinear, pixel centres at integers: doubled
+  // pixel i sits at i / 2 - 0.25) and reports every octave's keypoints as doubled
+  // coordinates / 2, i.e. 0.25 px right of and below where they are. The same bias in the
+  // template and the image cancels in the translation but not under rotation (the grasp
+  // point came out b - R b off: ~0.3 px mean in the sim cell), so remove it.
+  static void centreKeypoints(std::vector<cv::KeyPoint>& keys) {
+    for (auto& k : keys) k.pt -= cv::Point2f(0.25f, 0.25f);
+  }
   std::size_t templateKeypoints() const { return tplKeys_.size(); }
 
   Result<LocateOutput> locate(const cv::Mat& gray) override {
@@ -210,6 +221,7 @@ class SiftLocator final : public Locator {
     std::vector<cv::KeyPoint> keys;
     cv::Mat desc;
     sift_->detectAndCompute(gray(roi), cv::noArray(), keys, desc);
+    centreKeypoints(keys);
     LocateOutput out;
     if (desc.rows < 2 || tplDesc_.empty()) return out;
     // Query: the image's descriptors, so that every instance of the part finds the template.
@@ -257,6 +269,24 @@ class SiftLocator final : public Locator {
       d.u = gm[0].x;
       d.v = gm[0].y;
       d.angleDeg = normaliseDeg(std::atan2(-(gm[1].y - gm[0].y), gm[1].x - gm[0].x) * kRadToDeg);
+      if (p_.rigidPose) {
+        // The part is rigid and the camera looks straight at the conveyor: a similarity (4
+        // DOF) through the homography's inliers pins the pose down better than the
+        // homography's local rotation at the grasp point (8 DOF from ~30 inliers; see
+        // docs/localization.md, "sift").
+        std::vector<cv::Point2f> a, b;
+        for (const auto& m : mine) {
+          a.emplace_back(static_cast<float>(m.templatePx.u), static_cast<float>(m.templatePx.v));
+          b.emplace_back(static_cast<float>(m.imagePx.u), static_cast<float>(m.imagePx.v));
+        }
+        const cv::Mat sim = cv::estimateAffinePartial2D(a, b, cv::noArray(), cv::LMEDS);
+        if (!sim.empty()) {
+          const cv::Matx23d m(sim);
+          d.angleDeg = normaliseDeg(std::atan2(-m(1, 0), m(0, 0)) * kRadToDeg);
+          d.u = m(0, 0) * taught_.grasp.u + m(0, 1) * taught_.grasp.v + m(0, 2);
+          d.v = m(1, 0) * taught_.grasp.u + m(1, 1) * taught_.grasp.v + m(1, 2);
+        }
+      }
       d.score = double(inliers) / (inliers + p_.minMatches);  // 0.5 at the paper's 20 matches
       d.areaPx = area;
       if (d.score < taught_.minScore || d.angleDeg < taught_.angleMinDeg || d.angleDeg > taught_.angleMaxDeg) continue;
@@ -318,6 +348,7 @@ Result<std::unique_ptr<Locator>> makeSiftLocator(const cv::Mat& templateGray, co
   p.trees = r.integer("trees", p.trees, 1, 64);
   p.checks = r.integer("checks", p.checks, 1, 10000);
   p.ransacPx = r.number("ransac_px", p.ransacPx, 0.1, 100);
+  p.rigidPose = r.flag("rigid_pose", p.rigidPose);
   if (auto ok = r.finish(); !ok) return std::unexpected(ok.error());
   auto loc = std::make_unique<SiftLocator>(p, templateGray, taught);
   if (loc->templateKeypoints() < static_cast<std::size_t>(p.minMatches))
