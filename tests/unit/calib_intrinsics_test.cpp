@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
 
 #include "sim/calib_scene.hpp"
 #include "vision/calib/intrinsics.hpp"
@@ -254,6 +255,32 @@ TEST(calib_intrinsics, charuco_bad_input_is_named) {
   const auto s = vision::calib::detectPattern(charucoImg, smaller, "small.png");
   EXPECT_FALSE(s.found);
   EXPECT_NE(s.note.find("ids beyond this board"), std::string::npos) << s.note;
+  // Another tag of the dictionary in view (marker 80, beyond this board's 54): ignored.
+  {
+    PatternSpec big = spec;
+    big.cols = 15;
+    big.rows = 11;
+    auto layout = vision::calib::charucoLayout(big);
+    ASSERT_TRUE(layout) << layout.error().message;
+    cv::Mat tag;
+    cv::resize(layout->markerImages.at(80), tag, cv::Size(70, 70), 0, 0, cv::INTER_NEAREST);
+    cv::copyMakeBorder(tag, tag, 12, 12, 12, 12, cv::BORDER_CONSTANT, cv::Scalar(255));
+    // The image corner farthest from the plate.
+    const auto pts = sim::projectPattern(cam, spec, pose);
+    cv::Point best;
+    double bestDist = -1;
+    for (cv::Point c : {cv::Point(0, 0), cv::Point(800 - tag.cols, 0), cv::Point(0, 600 - tag.rows),
+                        cv::Point(800 - tag.cols, 600 - tag.rows)}) {
+      double dmin = 1e9;
+      for (const auto& q : pts) dmin = std::min<double>(dmin, cv::norm(cv::Point2f(c) + cv::Point2f(47, 47) - q));
+      if (dmin > bestDist) bestDist = dmin, best = c;
+    }
+    cv::Mat withTag = charucoImg.clone();
+    tag.copyTo(withTag(cv::Rect(best, tag.size())));
+    const auto t = vision::calib::detectPattern(withTag, spec, "tag.png");
+    EXPECT_TRUE(t.found) << t.note;
+    EXPECT_NE(t.note.find("1 marker(s) not on this board ignored"), std::string::npos) << t.note;
+  }
   // A wider board: the same marker ids, elsewhere; the layout check refuses it.
   PatternSpec wider = spec;
   wider.cols = 13;

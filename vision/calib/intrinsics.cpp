@@ -227,23 +227,31 @@ void detectCharuco(const cv::Mat& gray, const PatternSpec& spec, ViewDetection& 
   std::vector<int> markerIds;
   const cv::Ptr<cv::aruco::DetectorParameters> params = cv::aruco::DetectorParameters::create();
   cv::aruco::detectMarkers(gray, b->board->dictionary, markerCorners, markerIds, params, rejected);
-  // Markers of the dictionary that are not on this board: usually --cols/--rows given as
-  // squares instead of inner corners, or another board in view.
-  const int onBoard = static_cast<int>(b->board->ids.size());
-  int foreign = 0;
-  for (int id : markerIds) foreign += id >= onBoard;
   if (markerIds.empty()) {
     d.note = fmt::format("no {} marker found", spec.dictionary);
     return;
   }
-  if (foreign) {
-    // Not this board (a wrong --cols/--rows is the usual cause): its corners would get wrong ids.
-    d.note = fmt::format("{} of {} markers have ids beyond this board's {}: not a {}x{} board (--cols/--rows count "
-                         "inner corners, i.e. squares - 1)",
-                         foreign, markerIds.size(), onBoard, spec.cols, spec.rows);
+  // Markers of the dictionary that are not on this board (ids beyond its count): another tag
+  // in view -- ignored if the rest fits the board -- or --cols/--rows given as squares
+  // instead of inner corners, which the layout check below then refuses.
+  const int onBoard = static_cast<int>(b->board->ids.size());
+  std::size_t foreign = 0;
+  for (std::size_t m = markerIds.size(); m-- > 0;)
+    if (markerIds[m] >= onBoard) {
+      ++foreign;
+      markerIds.erase(markerIds.begin() + static_cast<std::ptrdiff_t>(m));
+      markerCorners.erase(markerCorners.begin() + static_cast<std::ptrdiff_t>(m));
+    }
+  const std::string foreignNote =
+      foreign ? fmt::format("; {} marker(s) with ids beyond this board's {} (--cols/--rows count inner corners, i.e. "
+                            "squares - 1)",
+                            foreign, onBoard)
+              : "";
+  if (foreign && markerIds.size() < 4) {
+    d.note = fmt::format("{} marker(s) of this board, too few to check the layout{}", markerIds.size(), foreignNote);
     return;
   }
-  cv::aruco::refineDetectedMarkers(gray, b->board, markerCorners, markerIds, rejected);
+  if (!markerIds.empty()) cv::aruco::refineDetectedMarkers(gray, b->board, markerCorners, markerIds, rejected);
   // The markers must sit where this board has them: one homography from the plate to the
   // image explains them to a few px (lens distortion) when --cols/--rows/--square/--marker
   // are right; a different layout with the same ids is off by about a square.
@@ -267,12 +275,13 @@ void detectCharuco(const cv::Mat& gray, const PatternSpec& spec, ViewDetection& 
       const double med = median(res);
       if (med > std::max(5.0, 0.2 * side)) {
         d.note = fmt::format("the {} markers do not fit a {}x{} board with {} mm squares and {} mm markers (median "
-                             "misfit {:.1f} px): check --cols/--rows/--square/--marker",
-                             markerIds.size(), spec.cols, spec.rows, spec.pitchMm, spec.markerMm, med);
+                             "misfit {:.1f} px): check --cols/--rows/--square/--marker{}",
+                             markerIds.size(), spec.cols, spec.rows, spec.pitchMm, spec.markerMm, med, foreignNote);
         return;
       }
     }
   }
+  if (foreign) d.note = fmt::format("{} marker(s) not on this board ignored", foreign);
   std::vector<cv::Point2f> corners;
   std::vector<int> ids;
   if (cv::aruco::interpolateCornersCharuco(markerCorners, markerIds, gray, b->board, corners, ids) > 0) {
@@ -301,8 +310,8 @@ void detectCharuco(const cv::Mat& gray, const PatternSpec& spec, ViewDetection& 
     }
   }
   if (static_cast<int>(d.corners.size()) < kMinCharucoCorners) {
-    d.note = fmt::format("{} markers, {} charuco corners (at least {} needed)", markerIds.size(), d.corners.size(),
-                         kMinCharucoCorners);
+    d.note = fmt::format("{} markers, {} charuco corners (at least {} needed){}", markerIds.size(), d.corners.size(),
+                         kMinCharucoCorners, foreignNote);
     return;
   }
   // Corners on one line say nothing about the plate's pose.
