@@ -478,8 +478,9 @@ Result<IntrinsicsResult> calibrateIntrinsics(const std::vector<ViewDetection>& v
   const auto& sd = res.camera.stdDev;
   if (3 * std::max(sd[2], sd[3]) > options.principalPointTolPx)
     cov.advice.push_back(fmt::format(
-        "principal point poorly determined: std dev cx {:.2f} px, cy {:.2f} px (3 std dev > {:.2f} px): add views with "
-        "the plate in the image corners and tilted about both axes, or a plate with more corners{}",
+        "principal point poorly determined: std dev cx {:.2f} px, cy {:.2f} px (3 std dev > {:.2f} px): it needs many "
+        "corners far out in the image corners -- add views with the plate there, tilted about both axes, use a plate "
+        "with more corners, or a ChArUco plate filling the frame{}",
         sd[2], sd[3], options.principalPointTolPx,
         options.tangential ? "; it trades off against the tangential distortion" : ""));
   if (3 * std::max(sd[0] / res.camera.fx(), sd[1] / res.camera.fy()) > options.focalTolRel)
