@@ -31,9 +31,26 @@ namespace {
 Result<calib::PatternSpec> patternSpec(const CalibPatternOptions& o) {
   auto kind = calib::parsePatternKind(o.pattern);
   if (!kind) return std::unexpected(kind.error());
-  if (o.cols < 2 || o.rows < 2) return fail(Status::BadArgument, fmt::format("--cols {} --rows {}: at least 2 each", o.cols, o.rows));
-  if (!(o.squareMm > 0)) return fail(Status::BadArgument, fmt::format("--square {}: must be > 0 mm", o.squareMm));
-  return calib::PatternSpec{*kind, o.cols, o.rows, o.squareMm};
+  calib::PatternSpec spec{*kind, o.cols, o.rows, o.squareMm};
+  spec.markerMm = o.markerMm > 0 ? o.markerMm : 0.75 * o.squareMm;
+  spec.dictionary = o.dictionary;
+  if (auto v = calib::validatePatternSpec(spec); !v) return std::unexpected(v.error());
+  return spec;
+}
+
+// Object points of a detection: all (patternObjectPoints order) or those its ids name (charuco).
+std::vector<cv::Point3f> viewObjectPoints(const calib::PatternSpec& spec, const calib::ViewDetection& d) {
+  const auto obj = calib::patternObjectPoints(spec);
+  if (d.ids.empty()) return obj;
+  std::vector<cv::Point3f> o;
+  for (int i : d.ids) o.push_back(obj[static_cast<std::size_t>(i)]);
+  return o;
+}
+
+std::string joinNames(const std::vector<std::string>& names) {
+  std::string list;
+  for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
+  return list;
 }
 
 // One progress line per image on stderr: "[#####-----]  5/10 name: status".
@@ -73,10 +90,29 @@ int runCalibrateIntrinsics(const CalibIntrinsicsOptions& o) {
       return bad(fmt::format("{}: {}x{} px, the first image is {}x{} px (one camera, one size)", files[i], img.cols,
                              img.rows, size.width, size.height));
     views.push_back(calib::detectPattern(img, *spec, name));
+    const auto& d = views.back();
     progress(i + 1, files.size(), name,
-             views.back().found ? fmt::format("found {} points", views.back().corners.size()) : "pattern NOT found");
+             d.found ? fmt::format("found {} points{}{}", d.corners.size(),
+                                   d.ids.size() && d.ids.size() < static_cast<std::size_t>(spec->cols * spec->rows)
+                                       ? fmt::format(" of {} (partial view)", spec->cols * spec->rows)
+                                       : "",
+                                   d.note.empty() ? "" : "; " + d.note)
+                     : "pattern NOT found" + (d.note.empty() ? "" : ": " + d.note));
   }
-  auto r = calib::calibrateIntrinsics(views, *spec, size);
+  std::vector<std::string> notFound;
+  for (const auto& v : views)
+    if (!v.found) notFound.push_back(v.name);
+  if (notFound.size() == views.size())
+    return bad(fmt::format("too few views: the {} {}x{} was found in none of the {} images ({}){}", calib::patternKindName(spec->kind),
+                           spec->cols, spec->rows, views.size(), joinNames(notFound),
+                           spec->kind == calib::PatternKind::Charuco
+                               ? fmt::format(": check --dict (now {}), --cols/--rows (inner corners = squares - 1) and "
+                                             "--square/--marker",
+                                             spec->dictionary)
+                               : ""));
+  calib::IntrinsicsOptions io;
+  io.tangential = !o.noTangential;
+  auto r = calib::calibrateIntrinsics(views, *spec, size, io);
   if (!r) return bad(r.error().message);
   const auto& c = r->camera;
   std::printf("per-view reprojection error (px):\n");
@@ -91,11 +127,24 @@ int runCalibrateIntrinsics(const CalibIntrinsicsOptions& o) {
   std::printf("result: rms %.4f px, fx %.3f fy %.3f cx %.3f cy %.3f, k1 %.5f k2 %.5f p1 %.6f p2 %.6f k3 %.5f, %zu views used\n",
               c.rmsPx, c.fx(), c.fy(), c.cx(), c.cy(), c.dist[0], c.dist[1], c.dist[2], c.dist[3], c.dist[4],
               r->usedViews.size());
+  const auto& sd = c.stdDev;
+  std::printf("std dev: fx %.3f fy %.3f cx %.3f cy %.3f px, k1 %.5f k2 %.5f p1 %.6f p2 %.6f k3 %.5f\n", sd[0], sd[1], sd[2],
+              sd[3], sd[4], sd[5], sd[6], sd[7], sd[8]);
+  if (c.tangential)
+    std::printf("tangential distortion: p1 %.1f std dev, p2 %.1f std dev from 0%s\n", r->coverage.p1Sigmas,
+                r->coverage.p2Sigmas,
+                std::max(r->coverage.p1Sigmas, r->coverage.p2Sigmas) < 2
+                    ? " (not significant: --no-tangential would pin the principal point down better)"
+                    : "");
+  else
+    std::printf("tangential distortion held at 0 (--no-tangential)\n");
   if (auto w = calib::writeIntrinsics(o.out, c); !w) return bad(w.error().message);
   std::printf("written: %s\n", o.out.c_str());
   if (o.json) {
     nlohmann::json j{{"rms_px", c.rmsPx}, {"fx", c.fx()}, {"fy", c.fy()}, {"cx", c.cx()}, {"cy", c.cy()},
                      {"dist", {c.dist[0], c.dist[1], c.dist[2], c.dist[3], c.dist[4]}},
+                     {"std_dev", {sd[0], sd[1], sd[2], sd[3], sd[4], sd[5], sd[6], sd[7], sd[8]}},
+                     {"tangential", c.tangential},
                      {"views_used", r->usedViews.size()}, {"views_total", views.size()},
                      {"rejected", r->rejectedViews}, {"coverage", r->coverage.imageCoverage},
                      {"advice", r->coverage.advice}, {"out", o.out}};
@@ -139,7 +188,12 @@ int runCalibrateHandEye(const CalibHandEyeOptions& o) {
       return bad(fmt::format("{}: {}x{} px, the intrinsics are for {}x{} px", file, img.cols, img.rows,
                              cam->imageSize.width, cam->imageSize.height));
     auto d = calib::detectPattern(img, *spec, p.image);
-    progress(i + 1, poses->size(), p.image, d.found ? "found" : "pattern NOT found");
+    if (d.found && !d.ids.empty() && d.ids.size() != static_cast<std::size_t>(spec->cols * spec->rows)) {
+      d.found = false;  // hand-eye uses the whole plate in every view
+      d.note = fmt::format("partial charuco view, {} of {} corners: hand-eye needs the whole plate", d.corners.size(),
+                           spec->cols * spec->rows);
+    }
+    progress(i + 1, poses->size(), p.image, d.found ? "found" : "pattern NOT found" + (d.note.empty() ? "" : ": " + d.note));
     if (!d.found) {
       notFound.push_back(p.image);
       continue;
@@ -244,9 +298,11 @@ int runCalibratePlane(const CalibPlaneOptions& o) {
     const cv::Mat img = cv::imread(o.image, cv::IMREAD_GRAYSCALE);
     if (img.empty()) return bad(fmt::format("{}: cannot read the image", o.image));
     const auto d = calib::detectPattern(img, *spec, o.image);
-    if (!d.found) return bad(fmt::format("{}: the {} {}x{} was not found", o.image, o.pattern.pattern, o.pattern.cols, o.pattern.rows));
+    if (!d.found)
+      return bad(fmt::format("{}: the {} {}x{} was not found{}", o.image, o.pattern.pattern, o.pattern.cols,
+                             o.pattern.rows, d.note.empty() ? "" : " (" + d.note + ")"));
     cv::Vec3d rv, tv;
-    cv::solvePnP(calib::patternObjectPoints(*spec), d.corners, cam->cameraMatrix, cam->dist, rv, tv);
+    cv::solvePnP(viewObjectPoints(*spec, d), d.corners, cam->cameraMatrix, cam->dist, rv, tv);
     plane = calib::planeFromPlate(he->x, se3::toPose(se3::fromRvecTvec(rv, tv)), o.thicknessMm);
     source = "plate";
     std::printf("plane from the plate in %s (thickness %.2f mm)\n", o.image.c_str(), o.thicknessMm);
@@ -348,7 +404,11 @@ int synthCell(const CalibSynthOptions& o, const calib::PatternSpec& spec) {
   fs::create_directories(out / "handeye");
   if (auto w = writeCameraTruth(cam, out / "camera_truth.yaml"); !w) return bad(w.error().message);
   sim::PlateRenderOptions ro;
-  const auto views = sim::randomPlateViews(cam, spec, o.views, o.seed, distance, o.maxTiltDeg);
+  if (o.partialShare > 0 && spec.kind != calib::PatternKind::Charuco)
+    return bad(fmt::format("--partial {}: partial views need --pattern charuco (a {} must be seen whole)", o.partialShare,
+                           o.pattern.pattern));
+  // --partial applies to the intrinsics views only: hand-eye and plane need the whole plate.
+  const auto views = sim::randomPlateViews(cam, spec, o.views, o.seed, distance, o.maxTiltDeg, 25, o.partialShare);
   for (std::size_t i = 0; i < views.size(); ++i) {
     ro.seed = o.seed * 1000 + 500 + i;
     const std::string name = fmt::format("plate_{:03d}.png", i);
@@ -382,7 +442,10 @@ int runCalibrateSynth(const CalibSynthOptions& o) {
   if (auto w = writeCameraTruth(cam, fs::path(o.out) / "camera_truth.yaml"); !w) return bad(w.error().message);
   if (o.kind == "intrinsics") {
     sim::PlateRenderOptions ro;
-    const auto poses = sim::randomPlateViews(cam, *spec, o.views, o.seed, o.distanceMm, o.maxTiltDeg);
+    if (o.partialShare > 0 && spec->kind != calib::PatternKind::Charuco)
+      return bad(fmt::format("--partial {}: partial views need --pattern charuco (a {} must be seen whole)",
+                             o.partialShare, o.pattern.pattern));
+    const auto poses = sim::randomPlateViews(cam, *spec, o.views, o.seed, o.distanceMm, o.maxTiltDeg, 25, o.partialShare);
     for (std::size_t i = 0; i < poses.size(); ++i) {
       ro.seed = o.seed * 1000 + i;
       const std::string name = fmt::format("plate_{:03d}.png", i);

@@ -9,15 +9,18 @@
 namespace vgr::daemon {
 
 struct CalibPatternOptions {
-  std::string pattern = "chessboard";  // chessboard | circles (charuco: not yet)
-  int cols = 9, rows = 6;              // inner corners (chessboard) / circles per row, column
+  std::string pattern = "chessboard";  // chessboard | circles | charuco
+  int cols = 9, rows = 6;              // inner corners (chessboard, charuco) / circles per row, column
   double squareMm = 20;                // square size / circle spacing, mm
+  double markerMm = 0;                 // charuco marker side, mm (0: 0.75 x square)
+  std::string dictionary = "DICT_5X5_100";  // charuco ArUco dictionary
 };
 
 struct CalibIntrinsicsOptions {
   std::string images;  // glob, e.g. "/data/calib/*.png"
   CalibPatternOptions pattern;
   std::string out = "intrinsics.yaml";
+  bool noTangential = false;  // hold p1 = p2 = 0 (CALIB_ZERO_TANGENT_DIST)
   bool json = false;
 };
 int runCalibrateIntrinsics(const CalibIntrinsicsOptions& o);
@@ -55,6 +58,7 @@ struct CalibSynthOptions {
   std::uint64_t seed = 1;
   double robotNoiseMm = 0.05, robotNoiseDeg = 0.01;
   double maxTiltDeg = 40, distanceMm = 420;
+  double partialShare = 0;             // share of views with the plate partly outside the image (charuco)
 };
 int runCalibrateSynth(const CalibSynthOptions& o);
 

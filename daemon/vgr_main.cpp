@@ -58,16 +58,20 @@ int main(int argc, char** argv) {
   auto* calCmd = app.add_subcommand("calibrate", "camera intrinsics, hand-eye, synthetic calibration data");
   calCmd->require_subcommand(1);
   auto addPattern = [](CLI::App* c, vgr::daemon::CalibPatternOptions& p) {
-    c->add_option("--pattern", p.pattern, "chessboard or circles (symmetric grid)");
-    c->add_option("--cols", p.cols, "inner corners (chessboard) / circles per row");
-    c->add_option("--rows", p.rows, "inner corners (chessboard) / circles per column");
+    c->add_option("--pattern", p.pattern, "chessboard, circles (symmetric grid) or charuco");
+    c->add_option("--cols", p.cols, "inner corners (chessboard, charuco: squares - 1) / circles per row");
+    c->add_option("--rows", p.rows, "inner corners (chessboard, charuco: squares - 1) / circles per column");
     c->add_option("--square", p.squareMm, "square size / circle spacing, mm");
+    c->add_option("--marker", p.markerMm, "charuco: ArUco marker side, mm (default 0.75 x square)");
+    c->add_option("--dict", p.dictionary, "charuco: ArUco dictionary, e.g. DICT_5X5_100 (default), DICT_4X4_50, DICT_6X6_250");
   };
   vgr::daemon::CalibIntrinsicsOptions calIntr;
   auto* calIntrCmd = calCmd->add_subcommand("intrinsics", "camera matrix and distortion from plate images");
   calIntrCmd->add_option("--images", calIntr.images, "glob of the plate images, e.g. 'calib/*.png'")->required();
   addPattern(calIntrCmd, calIntr.pattern);
   calIntrCmd->add_option("--out", calIntr.out, "OpenCV FileStorage YAML to write");
+  calIntrCmd->add_flag("--no-tangential", calIntr.noTangential,
+                       "hold the tangential distortion p1, p2 at 0 (only for a lens known to have none)");
   calIntrCmd->add_flag("--json", calIntr.json, "end with one JSON line (rms_px, fx, fy, cx, cy, views_used, ...)");
   vgr::daemon::CalibHandEyeOptions calHe;
   auto* calHeCmd = calCmd->add_subcommand("handeye", "hand-eye from a folder of plate images + poses.txt");
@@ -102,6 +106,8 @@ int main(int argc, char** argv) {
   calSynCmd->add_option("--robot-noise-deg", calSyn.robotNoiseDeg, "robot rotation noise, deg per axis");
   calSynCmd->add_option("--max-tilt", calSyn.maxTiltDeg, "largest plate tilt, deg");
   calSynCmd->add_option("--distance", calSyn.distanceMm, "camera-plate distance, mm");
+  calSynCmd->add_option("--partial", calSyn.partialShare, "share of views with the plate partly outside the image (charuco)")
+      ->check(CLI::Range(0.0, 1.0));
 
   vgr::daemon::LocateCommands locateCmds(app);  // sim render, teach, locate, eval
   CLI11_PARSE(app, argc, argv);

@@ -19,22 +19,62 @@ namespace {
 constexpr double kDeg = M_PI / 180.0;
 
 // Pattern gray value at plate point (x, y) mm: 0 = black, 1 = white, -1 = off the plate.
-double patternValue(const PatternSpec& s, double x, double y) {
-  const double p = s.pitchMm;
-  // The plate: the pattern plus a one-pitch margin (chessboard: the outer squares + margin).
-  const double lo = -2 * p, hiX = (s.cols + 1) * p, hiY = (s.rows + 1) * p;
-  if (x < lo || y < lo || x > hiX || y > hiY) return -1;
-  if (s.kind == PatternKind::Chessboard) {
-    // Inner corner (i, j) sits at (i p, j p): squares span [-p, cols p] x [-p, rows p].
-    if (x < -p || y < -p || x > s.cols * p || y > s.rows * p) return 1;
-    const long ix = static_cast<long>(std::floor(x / p)), iy = static_cast<long>(std::floor(y / p));
-    return ((ix + iy) & 1) ? 1 : 0;
+// Chessboard and circles analytically; charuco from OpenCV's board layout (markers in the
+// white squares, one texel per marker bit).
+class PlateTexture {
+ public:
+  explicit PlateTexture(const PatternSpec& s) : s_(s) {
+    if (s.kind != PatternKind::Charuco) return;
+    auto l = vision::calib::charucoLayout(s);
+    if (!l) return;  // validated by the caller
+    layout_ = std::move(*l);
+    // Square (qx, qy), qx in [0, cols], qy in [0, rows], spans [(qx-1) p, qx p] x [(qy-1) p, qy p].
+    squareMarker_.assign(static_cast<std::size_t>((s.cols + 1) * (s.rows + 1)), -1);
+    for (std::size_t m = 0; m < layout_.markers.size(); ++m) {
+      cv::Point2f c(0, 0);
+      for (const auto& q : layout_.markers[m]) c += q * 0.25f;
+      const int qx = static_cast<int>(std::floor(c.x / s.pitchMm)) + 1, qy = static_cast<int>(std::floor(c.y / s.pitchMm)) + 1;
+      if (qx >= 0 && qy >= 0 && qx <= s.cols && qy <= s.rows)
+        squareMarker_[static_cast<std::size_t>(qy * (s.cols + 1) + qx)] = static_cast<int>(m);
+    }
   }
-  const double i = std::round(x / p), j = std::round(y / p);
-  if (i < 0 || j < 0 || i >= s.cols || j >= s.rows) return 1;
-  const double dx = x - i * p, dy = y - j * p;
-  return dx * dx + dy * dy <= 0.0625 * p * p ? 0 : 1;  // radius 0.25 pitch
-}
+
+  double operator()(double x, double y) const {
+    const PatternSpec& s = s_;
+    const double p = s.pitchMm;
+    // The plate: the pattern plus a one-pitch margin (chessboard: the outer squares + margin).
+    const double lo = -2 * p, hiX = (s.cols + 1) * p, hiY = (s.rows + 1) * p;
+    if (x < lo || y < lo || x > hiX || y > hiY) return -1;
+    if (s.kind == PatternKind::Chessboard) {
+      // Inner corner (i, j) sits at (i p, j p): squares span [-p, cols p] x [-p, rows p].
+      if (x < -p || y < -p || x > s.cols * p || y > s.rows * p) return 1;
+      const long ix = static_cast<long>(std::floor(x / p)), iy = static_cast<long>(std::floor(y / p));
+      return ((ix + iy) & 1) ? 1 : 0;
+    }
+    if (s.kind == PatternKind::Charuco) {
+      if (x < -p || y < -p || x >= s.cols * p || y >= s.rows * p) return 1;
+      const int qx = static_cast<int>(std::floor(x / p)) + 1, qy = static_cast<int>(std::floor(y / p)) + 1;
+      const int m = squareMarker_[static_cast<std::size_t>(qy * (s.cols + 1) + qx)];
+      if (m < 0) return 0;  // a black square
+      // Marker-image coordinates: along corner 0 -> 1 (columns) and 0 -> 3 (rows).
+      const auto& c = layout_.markers[static_cast<std::size_t>(m)];
+      const cv::Point2d e1 = c[1] - c[0], e3 = c[3] - c[0], d(x - c[0].x, y - c[0].y);
+      const double a = d.dot(e1) / e1.dot(e1), b = d.dot(e3) / e3.dot(e3);
+      if (a < 0 || b < 0 || a >= 1 || b >= 1) return 1;  // white square around the marker
+      const cv::Mat& img = layout_.markerImages[static_cast<std::size_t>(m)];
+      return img.at<std::uint8_t>(static_cast<int>(b * img.rows), static_cast<int>(a * img.cols)) > 127 ? 1 : 0;
+    }
+    const double i = std::round(x / p), j = std::round(y / p);
+    if (i < 0 || j < 0 || i >= s.cols || j >= s.rows) return 1;
+    const double dx = x - i * p, dy = y - j * p;
+    return dx * dx + dy * dy <= 0.0625 * p * p ? 0 : 1;  // radius 0.25 pitch
+  }
+
+ private:
+  PatternSpec s_;
+  vision::calib::CharucoLayout layout_;
+  std::vector<int> squareMarker_;  // marker index per square, -1: black square
+};
 
 }  // namespace
 
@@ -103,6 +143,7 @@ cv::Mat renderPlate(const TrueCamera& cam, const PatternSpec& spec, const Pose& 
     plate[k] = {q.x(), q.y()};
     valid[k] = 1;
   }
+  const PlateTexture patternValue(spec);
   cv::Mat img(h, w, CV_8UC1);
   std::mt19937_64 rng(o.seed * 0x9E3779B97F4A7C15ull + 7);
   std::normal_distribution<double> noise(0.0, o.noiseSigma);
@@ -119,7 +160,7 @@ cv::Mat renderPlate(const TrueCamera& cam, const PatternSpec& spec, const Pose& 
             const double fa = (a + 0.5) / ss, fb = (b + 0.5) / ss;
             const cv::Point2d p = (1 - fa) * (1 - fb) * plate[k00] + fa * (1 - fb) * plate[k10] +
                                   (1 - fa) * fb * plate[k01] + fa * fb * plate[k11];
-            const double val = patternValue(spec, p.x, p.y);
+            const double val = patternValue(p.x, p.y);
             sum += val < 0 ? o.background : o.black + val * (o.white - o.black);
           }
         sum /= ss * ss;
@@ -153,8 +194,28 @@ std::vector<cv::Point2f> addCornerNoise(const std::vector<cv::Point2f>& truth, d
   return out;
 }
 
+vision::calib::ViewDetection visiblePattern(const TrueCamera& cam, const PatternSpec& spec, const Pose& camFromPlate,
+                                           double marginPx, const std::string& name) {
+  vision::calib::ViewDetection d;
+  d.name = name;
+  const se3::Iso t = se3::toIso(camFromPlate);
+  const auto obj = vision::calib::patternObjectPoints(spec);
+  const auto img = projectPattern(cam, spec, camFromPlate);
+  for (std::size_t i = 0; i < obj.size(); ++i) {
+    if ((t * Eigen::Vector3d(obj[i].x, obj[i].y, obj[i].z)).z() < 50) continue;
+    const cv::Point2f q = img[i];
+    if (q.x < marginPx || q.y < marginPx || q.x > cam.imageSize.width - 1 - marginPx ||
+        q.y > cam.imageSize.height - 1 - marginPx)
+      continue;
+    d.corners.push_back(q);
+    d.ids.push_back(static_cast<int>(i));
+  }
+  d.found = static_cast<int>(d.corners.size()) >= vision::calib::kMinCharucoCorners;
+  return d;
+}
+
 std::vector<Pose> randomPlateViews(const TrueCamera& cam, const PatternSpec& spec, int n, std::uint64_t seed,
-                                   double distanceMm, double maxTiltDeg, double marginPx) {
+                                   double distanceMm, double maxTiltDeg, double marginPx, double partialShare) {
   std::mt19937_64 rng(seed * 0x94D049BB133111EBull + 11);
   std::uniform_real_distribution<double> uni(-1.0, 1.0);
   const double fx = cam.cameraMatrix(0, 0), fy = cam.cameraMatrix(1, 1);
@@ -162,11 +223,18 @@ std::vector<Pose> randomPlateViews(const TrueCamera& cam, const PatternSpec& spe
   const Eigen::Vector3d centre((spec.cols - 1) * spec.pitchMm / 2, (spec.rows - 1) * spec.pitchMm / 2, 0);
   const auto obj = vision::calib::patternObjectPoints(spec);
   std::vector<Pose> views;
+  int partialMade = 0;
   for (int attempt = 0; static_cast<int>(views.size()) < n && attempt < 20000; ++attempt) {
+    const int k = static_cast<int>(views.size());
+    // Partial views spread evenly through the set: view k is partial when the running share
+    // of partial views would otherwise fall behind partialShare.
+    const bool partial = partialMade < static_cast<int>(std::floor((k + 1) * partialShare + 1e-9));
     // Aim the plate centre at one of 9 image regions in turn (corners included), jittered.
-    // The offset shrinks at random so that large plates still fit.
-    const int region = static_cast<int>(views.size()) % 9;
-    const double reach = 0.3 * (0.5 + 0.5 * std::abs(uni(rng)));
+    // The offset shrinks at random so that large plates still fit. Partial views do the same
+    // with a plate larger than the field of view at that distance: it fills the frame, image
+    // corners included, and sticks out on one side or more.
+    const int region = partial ? partialMade % 9 : k % 9;
+    const double reach = partial ? 0.4 * std::abs(uni(rng)) : 0.3 * (0.5 + 0.5 * std::abs(uni(rng)));
     const double u = cx + (region % 3 - 1) * reach * cam.imageSize.width + uni(rng) * 0.05 * cam.imageSize.width;
     const double v = cy + (region / 3 - 1) * reach * cam.imageSize.height + uni(rng) * 0.05 * cam.imageSize.height;
     const double d = distanceMm * (1.0 + 0.2 * uni(rng));
@@ -177,12 +245,22 @@ std::vector<Pose> randomPlateViews(const TrueCamera& cam, const PatternSpec& spe
     se3::Iso t = se3::Iso::Identity();
     t.linear() = r;
     t.translation() = Eigen::Vector3d((u - cx) / fx * d, (v - cy) / fy * d, d) - r * centre;
-    // Every pattern point (and the outer squares) in front of the camera and inside the image.
+    // Every pattern point (and the outer squares) in front of the camera.
     bool ok = true;
     for (const auto& p : obj)
       if ((t * Eigen::Vector3d(p.x, p.y, p.z)).z() < 50) ok = false;
     if (!ok) continue;
     const Pose pose = se3::toPose(t);
+    if (partial) {
+      // At least 30 % of the points inside the image (10 px margin), at least one outside.
+      const auto seen = visiblePattern(cam, spec, pose, 10.0, "");
+      if (seen.corners.size() < std::max<std::size_t>(12, obj.size() * 3 / 10) || seen.corners.size() == obj.size())
+        continue;
+      ++partialMade;
+      views.push_back(pose);
+      continue;
+    }
+    // Full views: the pattern and its outer squares inside the image with marginPx.
     PatternSpec outer = spec;  // the pattern grown by one pitch on each side
     outer.cols += 2;
     outer.rows += 2;

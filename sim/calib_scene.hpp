@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -52,9 +53,20 @@ std::vector<cv::Point2f> addCornerNoise(const std::vector<cv::Point2f>& truth, d
 // n plate poses T_cam_plate at distanceMm (+-20 %) with tilts up to maxTiltDeg about x and y
 // and +-30 deg about z, placed so that every pattern point lies at least marginPx inside the
 // image, spread over the image (views near the corners included).
+// partialShare (charuco): that share of the views, spread evenly through the set, may show
+// the plate partly outside the image (30 % or more of the points inside, at least one
+// outside). With a plate larger than the field of view at distanceMm these views fill the
+// frame, image corners included, where whole-plate views cannot put many corners; that is
+// what pins the principal point down (docs/calibration.md).
 std::vector<Pose> randomPlateViews(const TrueCamera& cam, const vision::calib::PatternSpec& spec, int n,
                                    std::uint64_t seed, double distanceMm = 450, double maxTiltDeg = 35,
-                                   double marginPx = 25);
+                                   double marginPx = 25, double partialShare = 0.0);
+
+// The pattern points of a view that project inside the image (marginPx from the border) and
+// lie in front of the camera, exact, with their ids (index into patternObjectPoints()), as a
+// charuco detector returns them; found when at least kMinCharucoCorners.
+vision::calib::ViewDetection visiblePattern(const TrueCamera& cam, const vision::calib::PatternSpec& spec,
+                                            const Pose& camFromPlate, double marginPx, const std::string& name);
 
 struct HandEyeScenario {
   vision::calib::HandEyeConfig config;

@@ -39,7 +39,7 @@ CalibratedCell calibrateCell() {
   std::vector<calib::ViewDetection> views;
   const auto poses = sim::randomPlateViews(c.truthCam, kSpec, 12, 21);
   for (std::size_t i = 0; i < poses.size(); ++i)
-    views.push_back({"view" + std::to_string(i), true, sim::projectPattern(c.truthCam, kSpec, poses[i])});
+    views.push_back({"view" + std::to_string(i), true, sim::projectPattern(c.truthCam, kSpec, poses[i]), {}, {}});
   auto intr = calib::calibrateIntrinsics(views, kSpec, c.truthCam.imageSize);
   EXPECT_TRUE(intr);
   c.cam = intr->camera;
