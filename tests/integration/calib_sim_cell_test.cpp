@@ -26,13 +26,14 @@ namespace {
 namespace fs = std::filesystem;
 namespace calib = vgr::vision::calib;
 
-// Largest distance between two pixel -> robot mappings over a 9 x 9 grid of the image at `h`.
+// Largest distance between two pixel -> robot mappings over a 9 x 9 grid of the image at
+// `h`, `margin` px in from the borders.
 template <class A, class B>
-double maxDifferenceMm(const A& a, const B& b, int width, int height, double h) {
+double maxDifferenceMm(const A& a, const B& b, int width, int height, double h, double margin = 0) {
   double worst = 0;
   for (int i = 0; i <= 8; ++i)
     for (int j = 0; j <= 8; ++j) {
-      const vgr::vision::PixelPoint p{(width - 1) * i / 8.0, (height - 1) * j / 8.0};
+      const vgr::vision::PixelPoint p{margin + (width - 1 - 2 * margin) * i / 8.0, margin + (height - 1 - 2 * margin) * j / 8.0};
       const auto qa = a(p, h), qb = b(p, h);
       if (!qa || !qb) return 1e9;
       worst = std::max(worst, std::sqrt((qa->x - qb->x) * (qa->x - qb->x) + (qa->y - qb->y) * (qa->y - qb->y) +
@@ -73,16 +74,22 @@ TEST(calib_sim_cell, ScriptCalibratesTheCellFromEmulatorFramesToTheTrueCamera) {
   const auto d = vgr::vision::se3::toIso(mount).inverse() * vgr::vision::se3::toIso(he->x);
   EXPECT_LT(vgr::vision::se3::rotationAngleDeg(d.linear()), 0.05);
 
-  // Mapping: every pixel of the image to the belt and to 25 mm above it. 0.1 mm = 0.2 px
-  // at 0.5 mm/px; the demo's bar is 0.5 mm.
+  // Mapping to the belt and to 25 mm above it, over the work area (where the emulator puts
+  // grasp points: 160 px in from the borders, SceneOptions::marginPx): 0.1 mm = 0.2 px at
+  // 0.5 mm/px; the demo's bar is 0.5 mm. The image's extreme corners, where no plate corner
+  // was seen and the lens model extrapolates, are printed, not bounded (docs/calibration.md).
   auto made = calib::loadCellCalibration((out / "intrinsics.yaml").string(), (out / "handeye.yaml").string(),
                                          (out / "plane.yaml").string());
   ASSERT_TRUE(made.has_value()) << made.error().message;
   auto viaFiles = [&](vgr::vision::PixelPoint p, double h) { return made->pixelToRobot(p, h); };
   auto viaTruth = [&](vgr::vision::PixelPoint p, double h) { return truth.pixelToPlane(p, h); };
-  const double atBelt = maxDifferenceMm(viaFiles, viaTruth, cfg->sim.width, cfg->sim.height, 0);
-  const double at25 = maxDifferenceMm(viaFiles, viaTruth, cfg->sim.width, cfg->sim.height, 25);
-  std::printf("calibrated mapping vs the true camera: max %.3f mm at the belt, %.3f mm at 25 mm\n", atBelt, at25);
+  const int w = cfg->sim.width, ht = cfg->sim.height;
+  const double margin = 160;
+  const double atBelt = maxDifferenceMm(viaFiles, viaTruth, w, ht, 0, margin);
+  const double at25 = maxDifferenceMm(viaFiles, viaTruth, w, ht, 25, margin);
+  std::printf("calibrated mapping vs the true camera, work area: max %.3f mm at the belt, %.3f mm at 25 mm; "
+              "whole image: %.3f / %.3f mm\n",
+              atBelt, at25, maxDifferenceMm(viaFiles, viaTruth, w, ht, 0), maxDifferenceMm(viaFiles, viaTruth, w, ht, 25));
   EXPECT_LT(atBelt, 0.1);
   EXPECT_LT(at25, 0.1);
 
@@ -92,7 +99,7 @@ TEST(calib_sim_cell, ScriptCalibratesTheCellFromEmulatorFramesToTheTrueCamera) {
                                             (committed / "plane.yaml").string());
   ASSERT_TRUE(example.has_value()) << example.error().message;
   auto viaExample = [&](vgr::vision::PixelPoint p, double h) { return example->pixelToRobot(p, h); };
-  EXPECT_LT(maxDifferenceMm(viaExample, viaFiles, cfg->sim.width, cfg->sim.height, 0), 0.01)
+  EXPECT_LT(maxDifferenceMm(viaExample, viaFiles, w, ht, 0), 0.01)
       << "config/examples/sim-calib is stale: run scripts/calibrate-sim-cell.sh";
   fs::remove_all(out);
   fs::remove(out.string() + ".log");
