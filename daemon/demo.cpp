@@ -125,7 +125,7 @@ Result<std::string> teachDemoJob(config::CellConfig cell, const std::string& bin
                                      method, job, sim::baseXAxisImageAngleDeg(cell)));
   const std::string path = work + "/sim-cell-taught.yaml";
   std::ofstream(path) << yaml;
-  std::printf("vgr demo: taught a %s job on the textured part (%s), config %s\n", method.c_str(), job.c_str(), path.c_str());
+  std::printf("vgr demo: taught a job of method %s on the textured part (%s), config %s\n", method.c_str(), job.c_str(), path.c_str());
   return path;
 }
 

@@ -1,0 +1,70 @@
+// `vgr demo`, as the README's first command runs it: the whole simulated cell (camera
+// emulator, vgrd mapping with the example's calibration files, PLC and three robot
+// simulators) for a few cycles, scored against the renderer's truth; and `--method`, which
+// teaches a job of another method on the textured part and runs the cell with it.
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+namespace {
+
+struct DemoRun {
+  int rc = -1;
+  std::string out;
+};
+
+DemoRun demo(const std::string& args) {
+  DemoRun r;
+  FILE* p = ::popen((std::string(VGR_BIN_DIR) + "/vgr demo --quiet " + args + " 2>&1").c_str(), "r");
+  if (p == nullptr) return r;
+  std::array<char, 4096> buf{};
+  for (std::size_t n; (n = std::fread(buf.data(), 1, buf.size(), p)) > 0;) r.out.append(buf.data(), n);
+  const int st = ::pclose(p);
+  r.rc = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  return r;
+}
+
+nlohmann::json summary(const std::string& out) {
+  const auto at = out.rfind("{\"cycles\"");
+  return at == std::string::npos ? nlohmann::json() : nlohmann::json::parse(out.substr(at), nullptr, false);
+}
+
+TEST(demo, TheExampleCellDeliversTruePosesThroughItsCalibrationFiles) {
+  const DemoRun r = demo("--cycles 8");
+  ASSERT_EQ(r.rc, 0) << r.out;
+  const auto s = summary(r.out);
+  ASSERT_TRUE(s.is_object()) << r.out;
+  EXPECT_EQ(s["ok"].get<int>(), 8) << r.out;
+  EXPECT_LT(s["max_pos_err_mm"].get<double>(), 0.5) << r.out;  // docs/demo.md's bar
+  EXPECT_LT(s["max_angle_err_deg"].get<double>(), 0.5) << r.out;
+}
+
+TEST(demo, MethodTeachesAJobOnTheTexturedPartAndRunsTheCellWithIt) {
+  const DemoRun r = demo("--cycles 8 --method shape");
+  ASSERT_EQ(r.rc, 0) << r.out;
+  EXPECT_NE(r.out.find("taught a job of method shape"), std::string::npos) << r.out;
+  const auto s = summary(r.out);
+  ASSERT_TRUE(s.is_object()) << r.out;
+  EXPECT_EQ(s["ok"].get<int>(), 8) << r.out;
+  EXPECT_LT(s["max_pos_err_mm"].get<double>(), 0.5) << r.out;
+  EXPECT_LT(s["max_angle_err_deg"].get<double>(), 0.5) << r.out;
+}
+
+TEST(demo, MethodWithAConfigOfOnesOwnIsRefusedWithAHint) {
+  const DemoRun r = demo("--cycles 1 --method shape --config " + std::string(VGR_SOURCE_DIR) + "/config/examples/sim-cell.yaml");
+  EXPECT_EQ(r.rc, 2) << r.out;
+  EXPECT_NE(r.out.find("vgr teach"), std::string::npos) << r.out;
+}
+
+TEST(demo, AnUnknownMethodIsNamed) {
+  const DemoRun r = demo("--cycles 1 --method nosuch");
+  EXPECT_EQ(r.rc, 2) << r.out;
+  EXPECT_NE(r.out.find("nosuch"), std::string::npos) << r.out;
+}
+
+}  // namespace
