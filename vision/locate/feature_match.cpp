@@ -220,7 +220,8 @@ Result<LocateOutput> locateFeatureParts(const cv::Mat& gray, const TaughtTemplat
     if (!poseFromHomography(fitted->H, taught.grasp, search.maxScale, f.d)) continue;
     f.d.u += roi.x;
     f.d.v += roi.y;
-    f.d.score = std::clamp(static_cast<double>(fitted->accepted.size()) / search.fullScoreInliers, 0.0, 1.0);
+    const std::size_t support = std::max(fitted->support, fitted->accepted.size());
+    f.d.score = std::clamp(static_cast<double>(support) / search.fullScoreInliers, 0.0, 1.0);
     if (f.d.score < taught.minScore || f.d.angleDeg < taught.angleMinDeg || f.d.angleDeg > taught.angleMaxDeg) continue;
     // A second fit on the same part (the rest of a part whose features at another height
     // disagree with the first fit) is not another part.

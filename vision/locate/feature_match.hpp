@@ -76,6 +76,10 @@ struct PartFit {
   // Image keypoints (indices) this fit used up even if it is rejected (e.g. PROSAC's inliers
   // when ADK's cluster is too small), so the next round looks elsewhere.
   std::vector<int> consumed;
+  // Matches that show the part is there, for its score: the fit's inliers; for orb-adk
+  // PROSAC's inliers (ADK's cluster, which gives the pose, holds one height level's
+  // matches of a multi-height part and would score it as a fraction of a part).
+  std::size_t support = 0;
 };
 // One robust homography over the candidates' keypoint pairs (template -> image) with
 // cv::findHomography's `robust` method (cv::RANSAC, cv::USAC_PROSAC: the candidates arrive

@@ -159,7 +159,8 @@ std::optional<PartFit> fitAdk(const std::vector<Match>& candidates, const Featur
   }
   std::vector<int> consumed;
   for (const Match& m : set) consumed.push_back(m.i);
-  if (static_cast<int>(best.size()) < std::max(4, minInliers)) return PartFit{cv::Matx33d::eye(), std::move(best), std::move(consumed)};
+  if (static_cast<int>(best.size()) < std::max(4, minInliers))
+    return PartFit{cv::Matx33d::eye(), std::move(best), std::move(consumed), 0};
   std::vector<cv::Point2f> src, dst;
   for (const Match& m : best) {
     src.push_back(tmpl.keypoints[static_cast<size_t>(m.t)].pt);
@@ -169,7 +170,7 @@ std::optional<PartFit> fitAdk(const std::vector<Match>& candidates, const Featur
   // transformation matrix ... using these matching point pairs with higher precision".
   const cv::Mat H = cv::findHomography(src, dst, 0);
   if (H.empty()) return std::nullopt;
-  return PartFit{cv::Matx33d(H), std::move(best), std::move(consumed)};
+  return PartFit{cv::Matx33d(H), std::move(best), std::move(consumed), set.size()};
 }
 
 class OrbAdkLocator final : public Locator {
