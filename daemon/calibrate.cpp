@@ -348,20 +348,7 @@ int writeHandEyeSet(const sim::TrueCamera& cam, const calib::PatternSpec& spec, 
     progress(i + 1, s.camFromPlate.size(), name, "rendered");
   }
   pf.close();
-  try {
-    cv::FileStorage f((dir / "truth.yaml").string(), cv::FileStorage::WRITE);
-    auto mat = [](const Pose& p) {
-      const Eigen::Matrix4d m = se3::toIso(p).matrix();
-      cv::Mat out(4, 4, CV_64F);
-      for (int i = 0; i < 4; ++i)
-        for (int j = 0; j < 4; ++j) out.at<double>(i, j) = m(i, j);
-      return out;
-    };
-    f << "calibration_kind" << "handeye_truth" << "configuration" << calib::handEyeConfigName(s.config);
-    f << "x" << mat(s.x) << "y" << mat(s.y) << "method" << "truth";
-  } catch (const cv::Exception& e) {
-    return bad(e.what());
-  }
+  if (auto w = calib::writeHandEyeTruth((dir / "truth.yaml").string(), s.config, s.x, s.y); !w) return bad(w.error().message);
   return 0;
 }
 

@@ -79,15 +79,10 @@ TEST_F(locate_vgrd_job, RunsATaughtHuJobAndDeliversTruePoses) {
   ASSERT_EQ(modbus_connect(ctx), 0);
   std::vector<std::uint32_t> cycles;
   for (int n = 0; n < 4; ++n) {
-    ASSERT_EQ(modbus_write_register(ctx, 2, 1000 + n), 1);  // TRIGGER_ID: each new value triggers
-    std::uint16_t head[4] = {};
-    const auto t = Clock::now();
-    do {
-      ASSERT_EQ(modbus_read_input_registers(ctx, 16, 4, head), 4);
-    } while (!((head[0] & 0x08) && !(head[0] & 0x04)) && Clock::now() - t < 5s);
-    ASSERT_TRUE(head[0] & 0x08) << "RESULT_VALID";
-    EXPECT_EQ(head[1], 0) << "ERROR_CODE";
-    cycles.push_back(head[2]);
+    const auto r = triggerCounter(ctx, static_cast<std::uint16_t>(1000 + n), 5s);
+    ASSERT_TRUE(r.status & 0x08) << "RESULT_VALID";
+    EXPECT_EQ(r.error, 0) << "ERROR_CODE";
+    cycles.push_back(r.resultId);
     std::this_thread::sleep_for(20ms);
   }
   modbus_close(ctx);
@@ -95,12 +90,7 @@ TEST_F(locate_vgrd_job, RunsATaughtHuJobAndDeliversTruePoses) {
 
   const auto renderer = vgr::sim::SceneRenderer::fromCellConfig(cfg_);
   for (const auto id : cycles) {
-    nlohmann::json entry;
-    for (int i = 0; i < 200 && entry.is_null(); ++i) {
-      for (const auto& j : journal())
-        if (j["cycle"].get<std::uint32_t>() == id) entry = j;
-      std::this_thread::sleep_for(10ms);
-    }
+    const nlohmann::json entry = journalEntry(id);
     ASSERT_FALSE(entry.is_null()) << "cycle " << id;
     ASSERT_EQ(entry["status"].get<int>(), 0) << entry.dump();
     ASSERT_EQ(entry["parts"].size(), 1u) << entry.dump();

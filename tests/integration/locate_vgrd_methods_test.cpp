@@ -88,15 +88,10 @@ TEST_P(locate_vgrd_methods, RunsATaughtJobOnTexturedPartsAndDeliversTruePoses) {
   std::vector<std::uint32_t> cycles;
   constexpr int kCycles = 6;
   for (int n = 0; n < kCycles; ++n) {
-    ASSERT_EQ(modbus_write_register(ctx, 2, 2000 + n), 1);  // TRIGGER_ID: each new value triggers
-    std::uint16_t head[4] = {};
-    const auto t = Clock::now();
-    do {
-      ASSERT_EQ(modbus_read_input_registers(ctx, 16, 4, head), 4);
-    } while (!((head[0] & 0x08) && !(head[0] & 0x04)) && Clock::now() - t < 12s);
-    ASSERT_TRUE(head[0] & 0x08) << "RESULT_VALID";
-    EXPECT_EQ(head[1], 0) << "ERROR_CODE";
-    cycles.push_back(head[2]);
+    const auto r = triggerCounter(ctx, static_cast<std::uint16_t>(2000 + n), 12s);
+    ASSERT_TRUE(r.status & 0x08) << "RESULT_VALID";
+    EXPECT_EQ(r.error, 0) << "ERROR_CODE";
+    cycles.push_back(r.resultId);
     std::this_thread::sleep_for(20ms);
   }
   modbus_close(ctx);
@@ -105,12 +100,7 @@ TEST_P(locate_vgrd_methods, RunsATaughtJobOnTexturedPartsAndDeliversTruePoses) {
   const vgr::sim::CellScenes scenes(cfg_);
   double maxPos = 0, maxAng = 0;
   for (const auto id : cycles) {
-    nlohmann::json entry;
-    for (int i = 0; i < 200 && entry.is_null(); ++i) {
-      for (const auto& j : journal())
-        if (j["cycle"].get<std::uint32_t>() == id) entry = j;
-      std::this_thread::sleep_for(10ms);
-    }
+    const nlohmann::json entry = journalEntry(id);
     ASSERT_FALSE(entry.is_null()) << "cycle " << id;
     ASSERT_EQ(entry["status"].get<int>(), 0) << entry.dump();
     ASSERT_EQ(entry["parts"].size(), 1u) << entry.dump();

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <modbus.h>
 #include <nlohmann/json.hpp>
 
 #include "config/cell_config.hpp"
@@ -123,6 +124,33 @@ class ModbusCell : public ::testing::Test {
       if (!j.is_discarded()) out.push_back(std::move(j));
     }
     return out;
+  }
+
+  // Counter mode: writes `triggerId` to TRIGGER_ID (HR 2; each new value triggers) and waits
+  // up to `timeout` for RESULT_VALID without BUSY. Returns {STATUS, ERROR_CODE, RESULT_ID}
+  // (IR 16..18); STATUS without RESULT_VALID (bit 3) when it timed out.
+  struct CounterResult {
+    std::uint16_t status = 0, error = 0, resultId = 0;
+  };
+  static CounterResult triggerCounter(modbus_t* ctx, std::uint16_t triggerId, std::chrono::milliseconds timeout) {
+    CounterResult r;
+    if (modbus_write_register(ctx, 2, triggerId) != 1) return r;
+    std::uint16_t head[4] = {};
+    const auto t = Clock::now();
+    do {
+      if (modbus_read_input_registers(ctx, 16, 4, head) != 4) return r;
+    } while (!((head[0] & 0x08) && !(head[0] & 0x04)) && Clock::now() - t < timeout);
+    return {head[0], head[1], head[2]};
+  }
+
+  // The journal line of cycle `cycle`, waiting up to 2 s for it to be written; null if none.
+  nlohmann::json journalEntry(std::uint32_t cycle) const {
+    for (int i = 0; i < 200; ++i) {
+      for (const auto& j : journal())
+        if (j["cycle"].get<std::uint32_t>() == cycle) return j;
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    return nullptr;
   }
 
   static inline int counter_ = 0;

@@ -497,18 +497,37 @@ Result<HandEyeResult> calibrateHandEyeAuto(const std::vector<HandEyeView>& views
   return r;
 }
 
+namespace {
+
+// A pose as the 4 x 4 homogeneous matrix the files store.
+cv::Mat homogeneous(const Pose& p) {
+  const Eigen::Matrix4d m = se3::toIso(p).matrix();
+  cv::Mat out(4, 4, CV_64F);
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) out.at<double>(i, j) = m(i, j);
+  return out;
+}
+
+}  // namespace
+
+Result<void> writeHandEyeTruth(const std::string& path, HandEyeConfig config, const Pose& x, const Pose& y) {
+  try {
+    cv::FileStorage f(path, cv::FileStorage::WRITE);
+    if (!f.isOpened()) return fail(Status::BadArgument, fmt::format("{}: cannot open for writing", path));
+    f << "calibration_kind" << "handeye_truth" << "configuration" << handEyeConfigName(config);
+    f << "x" << homogeneous(x) << "y" << homogeneous(y) << "method" << "truth";
+  } catch (const cv::Exception& e) {
+    return fail(Status::BadArgument, fmt::format("{}: {}", path, e.what()));
+  }
+  return {};
+}
+
 Result<void> writeHandEye(const std::string& path, const HandEyeResult& r) {
   try {
     cv::FileStorage fs(path, cv::FileStorage::WRITE);
     if (!fs.isOpened()) return fail(Status::BadArgument, fmt::format("{}: cannot open for writing", path));
     const auto& b = r.bestResult();
-    auto mat = [](const Pose& p) {
-      const Eigen::Matrix4d m = se3::toIso(p).matrix();
-      cv::Mat out(4, 4, CV_64F);
-      for (int i = 0; i < 4; ++i)
-        for (int j = 0; j < 4; ++j) out.at<double>(i, j) = m(i, j);
-      return out;
-    };
+    const auto mat = homogeneous;
     fs << "calibration_kind" << "handeye";
     fs << "configuration" << handEyeConfigName(r.config);
     fs << "x_meaning" << (r.config == HandEyeConfig::EyeInHand ? "T_gripper_cam" : "T_base_cam");

@@ -79,6 +79,8 @@ Result<HandEyeResult> calibrateHandEyeAuto(const std::vector<HandEyeView>& views
 // handeye.yaml (OpenCV FileStorage): configuration, X and Y as 4x4 matrices (mm), the chosen
 // method, its residuals and every method's residuals.
 Result<void> writeHandEye(const std::string& path, const HandEyeResult& r);
+// A synthetic set's truth in the same layout (`vgr calibrate handeye --truth` reads it).
+Result<void> writeHandEyeTruth(const std::string& path, HandEyeConfig config, const Pose& x, const Pose& y);
 struct HandEyeFile {
   HandEyeConfig config = HandEyeConfig::EyeInHand;
   Pose x, y;
