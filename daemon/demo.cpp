@@ -16,12 +16,11 @@
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "config/cell_config.hpp"
 #include "daemon/process.hpp"
 #include "sim/cell_scenes.hpp"
+#include "sim/dataset.hpp"
 
 namespace vgr::daemon {
 namespace fs = std::filesystem;
@@ -100,15 +99,15 @@ Result<std::string> teachDemoJob(config::CellConfig cell, const std::string& bin
                                  const std::string& method) {
   if (cell.sim.scene == "plate") cell.sim.scene = "part";
   const sim::CellScenes scenes(cell);
-  cv::Mat templ;
-  const auto t = scenes.partRenderer()->renderTemplate(templ);
   fs::create_directories(work + "/teach");
-  const std::string image = work + "/teach/template.png";
-  if (!cv::imwrite(image, templ)) return fail(Status::BadArgument, image + ": cannot write");
+  // template.png + template.yaml (grasp point, the levels' top faces with their heights).
+  const auto t = sim::writePartTemplate(*scenes.partRenderer(), work + "/teach");
+  if (!t) return std::unexpected(t.error());
   const std::string job = work + "/job";
-  auto teach = ChildProcess::spawn({bin + "/vgr", "teach", "--image", image, "--grasp", fmt::format("{:.3f},{:.3f}", t.graspU, t.graspV),
-                                    "--method", method, "--part-height", fmt::format("{:.3f}", scenes.partRenderer()->part().graspHeightMm),
-                                    "--out", job},
+  auto teach = ChildProcess::spawn({bin + "/vgr", "teach", "--image", work + "/teach/template.png", "--grasp",
+                                    fmt::format("{:.3f},{:.3f}", t->graspU, t->graspV), "--regions",
+                                    work + "/teach/template.yaml", "--method", method, "--part-height",
+                                    fmt::format("{:.3f}", scenes.partRenderer()->part().graspHeightMm), "--out", job},
                                    work + "/teach/teach.log");
   if (!teach || teach->wait(milliseconds(60000)) != 0) {
     std::ifstream in(work + "/teach/teach.log");
@@ -147,6 +146,13 @@ int runDemo(const DemoOptions& o) {
     return 2;
   }
   if (o.seed >= 0) cfg->sim.seed = static_cast<std::uint64_t>(o.seed);
+  if (!o.scene.empty()) {
+    if (o.method.empty() || (o.scene != "part" && o.scene != "multi")) {
+      std::fprintf(stderr, "vgr demo: --scene part|multi goes with --method (the example's moments job is taught on the plate)\n");
+      return 2;
+    }
+    cfg->sim.scene = o.scene;
+  }
   if (!o.method.empty() && !o.configPath.empty()) {
     std::fprintf(stderr, "vgr demo: --method runs the embedded example cell; for your own config, teach a job with "
                          "`vgr teach` and name its folder in the config's jobs (docs/localization.md)\n");

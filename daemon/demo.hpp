@@ -20,6 +20,7 @@ struct DemoOptions {
   // job, taught with `vgr teach` on the textured part (sim.scene `part` unless the config
   // says `multi`), the way an integrator teaches a reference part. Embedded config only.
   std::string method;
+  std::string scene;           // with `method`: part (default) or multi (sim.scene, docs/ground-truth.md)
 };
 
 // Returns the process exit code: 0 when every cycle delivered a pose and every robot reply

@@ -29,6 +29,7 @@ int main(int argc, char** argv) {
   demoCmd->add_option("--interval-ms", demo.intervalMs, "PLC pause between cycles")->check(CLI::Range(0, 60000));
   demoCmd->add_option("--seed", demo.seed, "scene seed (default: the config's sim.seed)");
   demoCmd->add_flag("--quiet", demo.quiet, "only the summary lines");
+  demoCmd->add_option("--scene", demo.scene, "with --method: part (textured plate, default) or multi (height levels)");
   demoCmd->add_option("--method", demo.method, "run a job of this method taught on the textured part (moments, hu, sift, orb-ransac, orb-prosac, orb-adk, contour-weighted, shape)");
 
   std::string checkPath;

@@ -25,23 +25,13 @@ Result<void> writeText(const std::filesystem::path& path, const std::string& tex
 
 }  // namespace
 
-Result<DatasetSummary> writeDataset(const DatasetOptions& o) {
-  namespace fs = std::filesystem;
-  if (o.part != "flat" && o.part != "multi") return fail(Status::BadArgument, fmt::format("--part: expected flat or multi, got '{}'", o.part));
-  if (o.levels < 2 || o.levels > 4) return fail(Status::BadArgument, fmt::format("--levels: expected 2..4, got {}", o.levels));
-  std::error_code ec;
-  fs::create_directories(o.outDir, ec);
-  if (ec) return fail(Status::BadArgument, fmt::format("{}: cannot create the folder: {}", o.outDir, ec.message()));
-  const fs::path dir(o.outDir);
-  const PartSceneRenderer renderer = datasetRenderer(o);
-  const PartSceneOptions& s = renderer.options();
-
-  // The template and its truth.
+Result<PartTemplate> writePartTemplate(const PartSceneRenderer& renderer, const std::string& dirName) {
+  const std::filesystem::path dir(dirName);
   cv::Mat templ;
   const PartTemplate t = renderer.renderTemplate(templ);
-  if (!cv::imwrite((dir / "template.png").string(), templ)) return fail(Status::Internal, fmt::format("{}/template.png: cannot write", o.outDir));
+  if (!cv::imwrite((dir / "template.png").string(), templ)) return fail(Status::Internal, fmt::format("{}/template.png: cannot write", dirName));
   std::string ty = fmt::format(
-      "# Template of this dataset (vgr sim render): the part alone under the optical axis, rz = 0.\n"
+      "# Template of the rendered part (vgr sim render, vgr demo): alone under the optical axis, rz = 0.\n"
       "# Teach a job on it: vgr teach --image template.png --grasp {:.3f},{:.3f} --regions template.yaml --out JOB\n"
       "image: template.png\n"
       "grasp: {{x_px: {:.4f}, y_px: {:.4f}}}   # template px, pixel centres at integers, y down\n"
@@ -59,6 +49,21 @@ Result<DatasetSummary> writeDataset(const DatasetOptions& o) {
     ty += "]\n";
   }
   if (auto w = writeText(dir / "template.yaml", ty); !w) return std::unexpected(w.error());
+  return t;
+}
+
+Result<DatasetSummary> writeDataset(const DatasetOptions& o) {
+  namespace fs = std::filesystem;
+  if (o.part != "flat" && o.part != "multi") return fail(Status::BadArgument, fmt::format("--part: expected flat or multi, got '{}'", o.part));
+  if (o.levels < 2 || o.levels > 4) return fail(Status::BadArgument, fmt::format("--levels: expected 2..4, got {}", o.levels));
+  std::error_code ec;
+  fs::create_directories(o.outDir, ec);
+  if (ec) return fail(Status::BadArgument, fmt::format("{}: cannot create the folder: {}", o.outDir, ec.message()));
+  const fs::path dir(o.outDir);
+  const PartSceneRenderer renderer = datasetRenderer(o);
+  const PartSceneOptions& s = renderer.options();
+
+  if (auto t = writePartTemplate(renderer, o.outDir); !t) return std::unexpected(t.error());
 
   const std::string ds = fmt::format(
       "# How this dataset was made (vgr sim render); truth is in truth.csv.\n"

@@ -26,6 +26,10 @@ struct DatasetSummary {
 // Creates outDir (and parents) if needed; overwrites files of the same names.
 Result<DatasetSummary> writeDataset(const DatasetOptions& options);
 
+// The part's template to teach on: DIR/template.png and DIR/template.yaml (grasp point,
+// grasp height, crop offset, the levels' top faces as paper 000's regions). DIR must exist.
+Result<PartTemplate> writePartTemplate(const PartSceneRenderer& renderer, const std::string& dir);
+
 // The renderer a dataset's options describe (shared with tests).
 PartSceneRenderer datasetRenderer(const DatasetOptions& options);
 

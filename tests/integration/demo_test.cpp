@@ -55,6 +55,17 @@ TEST(demo, MethodTeachesAJobOnTheTexturedPartAndRunsTheCellWithIt) {
   EXPECT_LT(s["max_angle_err_deg"].get<double>(), 0.5) << r.out;
 }
 
+TEST(demo, HeightAwareMethodOnTheMultiHeightPartGraspsTheBoss) {
+  // The grasp point is on a 35 mm boss: mapped at that height, against the truth there.
+  const DemoRun r = demo("--cycles 6 --method shape --scene multi");
+  ASSERT_EQ(r.rc, 0) << r.out;
+  const auto s = summary(r.out);
+  ASSERT_TRUE(s.is_object()) << r.out;
+  EXPECT_EQ(s["ok"].get<int>(), 6) << r.out;
+  EXPECT_LT(s["max_pos_err_mm"].get<double>(), 0.5) << r.out;
+  EXPECT_LT(s["max_angle_err_deg"].get<double>(), 0.5) << r.out;
+}
+
 TEST(demo, MethodWithAConfigOfOnesOwnIsRefusedWithAHint) {
   const DemoRun r = demo("--cycles 1 --method shape --config " + std::string(VGR_SOURCE_DIR) + "/config/examples/sim-cell.yaml");
   EXPECT_EQ(r.rc, 2) << r.out;
