@@ -233,6 +233,26 @@ PlacedPart PartSceneRenderer::place(double xMm, double yMm, double rzDeg) const 
 
 namespace {
 
+// Warps `src` (CV_8UC1) by the homography taking the four `from` points to `to` into dst
+// (CV_8UC1), alpha-blended by `mask` warped the same way (a face's texture onto the image).
+void blendWarped(const cv::Mat& src, const cv::Mat& mask, const std::vector<cv::Point2f>& from,
+                 const std::vector<cv::Point2f>& to, cv::Mat& dst) {
+  const cv::Rect box = cv::boundingRect(to) & cv::Rect(0, 0, dst.cols, dst.rows);
+  if (box.empty()) return;
+  const cv::Mat h = (cv::Mat_<double>(3, 3) << 1, 0, -box.x, 0, 1, -box.y, 0, 0, 1) * cv::getPerspectiveTransform(from, to);
+  cv::Mat tex, alpha;
+  cv::warpPerspective(src, tex, h, box.size(), cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
+  cv::warpPerspective(mask, alpha, h, box.size(), cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
+  cv::Mat roi = dst(box);
+  for (int y = 0; y < roi.rows; ++y) {
+    auto* r = roi.ptr<std::uint8_t>(y);
+    const auto* t = tex.ptr<std::uint8_t>(y);
+    const auto* m = alpha.ptr<std::uint8_t>(y);
+    for (int x = 0; x < roi.cols; ++x)
+      if (m[x]) r[x] = static_cast<std::uint8_t>((r[x] * (255 - m[x]) + t[x] * m[x] + 127) / 255);
+  }
+}
+
 // Image px of a part-frame point at height h for a part placed at p.
 cv::Point2d projectPart(const vision::PinholePlaneModel& cam, const PlacedPart& p, PointMm q, double h) {
   const double c = std::cos(p.rzDeg * kDegToRad), s = std::sin(p.rzDeg * kDegToRad);
@@ -283,7 +303,6 @@ PartScene PartSceneRenderer::sample(std::uint64_t index) const {
 }
 
 void PartSceneRenderer::drawPart(const PlacedPart& p, cv::Mat& dst) const {
-  const cv::Rect imageRect(0, 0, dst.cols, dst.rows);
   for (std::size_t k = 0; k < part_.layers.size(); ++k) {
     const PartLayer& layer = part_.layers[k];
     const Sheet& sheet = *sheets_[k];
@@ -314,22 +333,7 @@ void PartSceneRenderer::drawPart(const PlacedPart& p, cv::Mat& dst) const {
       from.emplace_back(static_cast<float>(i), static_cast<float>(j));
       to.emplace_back(static_cast<float>(a.x), static_cast<float>(a.y));
     }
-    cv::Rect box = cv::boundingRect(to) & imageRect;
-    if (box.empty()) continue;
-    cv::Mat h = cv::getPerspectiveTransform(from, to);
-    cv::Mat shift = (cv::Mat_<double>(3, 3) << 1, 0, -box.x, 0, 1, -box.y, 0, 0, 1);
-    h = shift * h;
-    cv::Mat tex, mask;
-    cv::warpPerspective(sheet.tex, tex, h, box.size(), cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
-    cv::warpPerspective(sheet.mask, mask, h, box.size(), cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
-    cv::Mat roi = dst(box);
-    for (int y = 0; y < roi.rows; ++y) {
-      auto* r = roi.ptr<std::uint8_t>(y);
-      const auto* t = tex.ptr<std::uint8_t>(y);
-      const auto* m = mask.ptr<std::uint8_t>(y);
-      for (int x = 0; x < roi.cols; ++x)
-        if (m[x]) r[x] = static_cast<std::uint8_t>((r[x] * (255 - m[x]) + t[x] * m[x] + 127) / 255);
-    }
+    blendWarped(sheet.tex, sheet.mask, from, to, dst);
   }
 }
 
@@ -351,7 +355,6 @@ void PartSceneRenderer::drawDecoys(const PartScene& scene, cv::Mat& dst) const {
   }
   std::discrete_distribution<std::size_t> pickLayer(area.begin(), area.end());
   const cv::Rect2d image(0, 0, options_.width - 1, options_.height - 1);
-  const cv::Rect imageRect(0, 0, dst.cols, dst.rows);
   const int decoys = std::clamp(options_.decoys, 0, 16);
   for (int k = 0; k < decoys; ++k) {
     for (int attempt = 0; attempt < 100; ++attempt) {
@@ -417,20 +420,7 @@ void PartSceneRenderer::drawDecoys(const PartScene& scene, cv::Mat& dst) const {
           from.emplace_back(static_cast<float>(i), static_cast<float>(j));
           to.emplace_back(static_cast<float>(a.x), static_cast<float>(a.y));
         }
-        const cv::Rect dbox = cv::boundingRect(to) & imageRect;
-        if (dbox.empty()) continue;
-        const cv::Mat hm = (cv::Mat_<double>(3, 3) << 1, 0, -dbox.x, 0, 1, -dbox.y, 0, 0, 1) * cv::getPerspectiveTransform(from, to);
-        cv::Mat tex, mask;
-        cv::warpPerspective(src, tex, hm, dbox.size(), cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
-        cv::warpPerspective(pieceMask, mask, hm, dbox.size(), cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
-        cv::Mat roi = dst(dbox);
-        for (int y = 0; y < roi.rows; ++y) {
-          auto* rw = roi.ptr<std::uint8_t>(y);
-          const auto* t = tex.ptr<std::uint8_t>(y);
-          const auto* m = mask.ptr<std::uint8_t>(y);
-          for (int x = 0; x < roi.cols; ++x)
-            if (m[x]) rw[x] = static_cast<std::uint8_t>((rw[x] * (255 - m[x]) + t[x] * m[x] + 127) / 255);
-        }
+        blendWarped(src, pieceMask, from, to, dst);
       }
       break;
     }
