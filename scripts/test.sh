@@ -5,6 +5,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/install-deps.sh
+./scripts/reserve-ports.sh
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DVGR_WERROR=ON
 cmake --build build -j"$(nproc)"
 ctest --test-dir build --output-on-failure --timeout 600
