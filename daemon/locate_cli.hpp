@@ -1,4 +1,4 @@
-// `vgr` subcommands for localization (issue 6, docs/localization.md and docs/datasets.md):
+// `vgr` subcommands for localization (papers 000-002; docs/localization.md, docs/datasets.md):
 //   vgr sim render   datasets with ground truth from the part renderer
 //   vgr teach        a job folder from a template image and its grasp point
 //   vgr locate       run a job's method on one image, JSON out

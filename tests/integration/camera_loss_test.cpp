@@ -17,14 +17,14 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "config/cell_config.hpp"
-#include "daemon/process.hpp"
 #include "sim/scene.hpp"
+#include "tests/support/processes.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 using std::chrono::milliseconds;
-using vgr::daemon::ChildProcess;
+using vgr::test::ChildProcess;
 
 class CameraLoss : public ::testing::Test {
  protected:
@@ -38,12 +38,9 @@ class CameraLoss : public ::testing::Test {
     vgr::sim::SceneRenderer::fromCellConfig(cell).render(1, img);
     ASSERT_TRUE(cv::imwrite((dir_ / "images" / "scene.png").string(), img));
     configPath_ = *vgr::config::writeSimCell(dir_.string());  // + its calibration files
-    auto p = ChildProcess::spawn({std::string(VGR_BIN_DIR) + "/vgr-sim-camera", "--images", (dir_ / "images").string(),
-                                  "--loss", "0.0001"},
-                                 (dir_ / "camera.log").string());
-    ASSERT_TRUE(p.has_value());
-    ASSERT_TRUE(p->waitForLine("\"ready\"", milliseconds(10000)));
-    emulator_ = std::make_unique<ChildProcess>(std::move(*p));
+    emulator_ = vgr::test::startEmulator({"--images", (dir_ / "images").string(), "--loss", "0.0001"},
+                                         (dir_ / "camera.log").string(), milliseconds(10000));
+    ASSERT_NE(emulator_, nullptr);
   }
   void TearDown() override {
     emulator_.reset();
