@@ -75,18 +75,8 @@ TEST_F(calib_multiheight_vgrd, vgrd_maps_with_the_multi_height_map) {
   const std::string l = log("vgrd.log");
   EXPECT_NE(l.find("mapping with multi-height map (15 x 15 points"), std::string::npos) << l;
 
-  modbus_t* ctx = modbus_new_tcp("127.0.0.1", kModbusPort);
-  ASSERT_NE(ctx, nullptr);
-  ASSERT_EQ(modbus_connect(ctx), 0);
   std::vector<std::uint32_t> cycles;
-  for (int n = 0; n < 6; ++n) {
-    const auto r = triggerCounter(ctx, static_cast<std::uint16_t>(2000 + n), 5s);
-    ASSERT_TRUE(r.status & 0x08) << "RESULT_VALID";
-    EXPECT_EQ(r.error, 0) << "ERROR_CODE";
-    cycles.push_back(r.resultId);
-  }
-  modbus_close(ctx);
-  modbus_free(ctx);
+  ASSERT_NO_FATAL_FAILURE(triggerCycles(6, 2000, 5s, cycles));
 
   const auto renderer = vgr::sim::SceneRenderer::fromCellConfig(cfg_);
   for (const auto id : cycles) {

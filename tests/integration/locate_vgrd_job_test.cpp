@@ -77,19 +77,8 @@ TEST_F(locate_vgrd_job, RunsATaughtHuJobAndDeliversTruePoses) {
   ASSERT_NO_FATAL_FAILURE(startCell([&](std::string y) { return withFolderJob(y, folder, t0.angleImgDeg); }));
   EXPECT_NE(log("vgrd.log").find("method hu from"), std::string::npos) << log("vgrd.log");
 
-  modbus_t* ctx = modbus_new_tcp("127.0.0.1", kModbusPort);
-  ASSERT_NE(ctx, nullptr);
-  ASSERT_EQ(modbus_connect(ctx), 0);
   std::vector<std::uint32_t> cycles;
-  for (int n = 0; n < 4; ++n) {
-    const auto r = triggerCounter(ctx, static_cast<std::uint16_t>(1000 + n), 5s);
-    ASSERT_TRUE(r.status & 0x08) << "RESULT_VALID";
-    EXPECT_EQ(r.error, 0) << "ERROR_CODE";
-    cycles.push_back(r.resultId);
-    std::this_thread::sleep_for(20ms);
-  }
-  modbus_close(ctx);
-  modbus_free(ctx);
+  ASSERT_NO_FATAL_FAILURE(triggerCycles(4, 1000, 5s, cycles));
 
   const auto renderer = vgr::sim::SceneRenderer::fromCellConfig(cfg_);
   for (const auto id : cycles) {

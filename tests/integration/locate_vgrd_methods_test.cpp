@@ -86,20 +86,9 @@ TEST_P(locate_vgrd_methods, RunsATaughtJobOnTexturedPartsAndDeliversTruePoses) {
   EXPECT_NE(log("camera.log").find("rendered 'part' scenes"), std::string::npos) << log("camera.log");
   EXPECT_NE(log("vgrd.log").find("method " + method + " from"), std::string::npos) << log("vgrd.log");
 
-  modbus_t* ctx = modbus_new_tcp("127.0.0.1", kModbusPort);
-  ASSERT_NE(ctx, nullptr);
-  ASSERT_EQ(modbus_connect(ctx), 0);
   std::vector<std::uint32_t> cycles;
   constexpr int kCycles = 6;
-  for (int n = 0; n < kCycles; ++n) {
-    const auto r = triggerCounter(ctx, static_cast<std::uint16_t>(2000 + n), 12s);
-    ASSERT_TRUE(r.status & 0x08) << "RESULT_VALID";
-    EXPECT_EQ(r.error, 0) << "ERROR_CODE";
-    cycles.push_back(r.resultId);
-    std::this_thread::sleep_for(20ms);
-  }
-  modbus_close(ctx);
-  modbus_free(ctx);
+  ASSERT_NO_FATAL_FAILURE(triggerCycles(kCycles, 2000, 12s, cycles));
 
   const vgr::sim::CellScenes scenes(cfg_);
   double maxPos = 0, maxAng = 0;
