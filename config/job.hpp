@@ -3,14 +3,14 @@
 // and vgrd (cell config `jobs[].folder`) load. Parse -> validate; errors name the file,
 // the line and the key: "JOB/job.yaml:12: key 'regions[1].height_factor': expected ...".
 // Plain data, no images: the caller reads the template (templatePath()) and builds the
-// method with vision::makeLocator(method, template, taught).
+// method with vision::makeLocator(method, template, taught) (config links no vision code).
 #pragma once
 
 #include <string>
 #include <vector>
 
 #include "core/result.hpp"
-#include "vision/locate/locator.hpp"  // TaughtTemplate (plain structs; config links no vision code)
+#include "core/taught_template.hpp"
 
 namespace vgr::config {
 
@@ -21,8 +21,8 @@ struct JobFile {
   std::string templateImage = "template.png";  // relative to folder
   // Grasp points in template px; the first is the one the locator transfers
   // (taught.grasp), the others are kept for the robot program (e.g. alternative grips).
-  std::vector<vision::PixelPoint> grasps;
-  vision::TaughtTemplate taught;           // grasp, ROI, thresholds, regions, method params
+  std::vector<PixelPoint> grasps;
+  TaughtTemplate taught;           // grasp, ROI, thresholds, regions, method params
   double partHeightMm = 0;                 // mm, [0, 1000]: grasp height above the conveyor plane
   // Reference pose the offsets are given from (robot base frame) and where the part lay in
   // the template (px, deg): the taught pose.
@@ -45,6 +45,6 @@ std::string jobYaml(const JobFile& job);
 
 // Reads a `regions:` list in the job.yaml schema from any YAML file (e.g. a dataset's
 // template.yaml) for `vgr teach --regions`.
-Result<std::vector<vision::TemplateRegion>> loadRegions(const std::string& path);
+Result<std::vector<TemplateRegion>> loadRegions(const std::string& path);
 
 }  // namespace vgr::config

@@ -59,13 +59,20 @@ bool ParamReader::flag(const std::string& name, bool fallback) {
 }
 
 void ParamReader::setError(const std::string& name, const std::string& expected, const std::string& got) {
-  if (error_.empty()) error_ = fmt::format("{}: parameter '{}': expected {}, got '{}'", method_, name, expected, got);
+  if (error_.empty())
+    error_ = fmt::format("{}: parameter '{}': expected {}, got '{}'{}", method_, name, expected, got, whereWritten(name));
+}
+
+std::string ParamReader::whereWritten(const std::string& name) const {
+  const auto it = sources_.find(name);
+  if (it == sources_.end()) return "";
+  return fmt::format(" ({}:{}: key 'params.{}')", it->second.file, it->second.line, name);
 }
 
 Result<void> ParamReader::finish() const {
   if (!error_.empty()) return fail(Status::BadArgument, error_);
   for (const auto& [name, value] : params_)
-    if (!used_.contains(name)) return fail(Status::BadArgument, fmt::format("{}: unknown parameter '{}'", method_, name));
+    if (!used_.contains(name)) return fail(Status::BadArgument, fmt::format("{}: unknown parameter '{}'{}", method_, name, whereWritten(name)));
   return {};
 }
 
@@ -113,7 +120,7 @@ class MomentsLocator final : public Locator {
 };
 
 Result<std::unique_ptr<Locator>> makeMoments(const cv::Mat& templateGray, const TaughtTemplate& taught) {
-  ParamReader r("moments", taught.params);
+  ParamReader r("moments", taught);
   MomentsParams p;
   p.threshold = r.integer("threshold", 0, 0, 255);
   p.minAreaPx = r.number("min_area_px", p.minAreaPx, 1, 1e9);

@@ -1,0 +1,135 @@
+// job.yaml as config/job.hpp writes it (yaml-cpp's emitter): any name, template, calibration
+// path and parameter text round-trips exactly, numbers included; a method parameter's range
+// error names the file and line of its `params:` entry (vision/locate/params.hpp).
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <string>
+
+#include <fmt/core.h>
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+
+#include "config/job.hpp"
+#include "vision/locate/locator.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path tempDir(const std::string& name) {
+  const fs::path p = fs::temp_directory_path() / fmt::format("vgr-job-yaml-{}-{}", name, ::getpid());
+  fs::remove_all(p);
+  fs::create_directories(p);
+  return p;
+}
+
+int lineOf(const std::string& text, const std::string& what) {
+  const auto at = text.find(what);
+  EXPECT_NE(at, std::string::npos) << what;
+  return 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<long>(at), '\n'));
+}
+
+const char* const kNastyStrings[] = {
+    "box \"A\" C:\\temp", "  leading and trailing spaces  ", "# not a comment", "key: value", "a, b: [c] {d}",
+    "two\nlines", "tab\there", "ünïcødé 部品 ✓", "'single' \"double\"", "-", "- item", "~", "null", "true", "0x1F",
+    "123", "1e3", "", "&anchor *alias !tag", "%directive", "@at `tick`", "back\\slash\\"};
+
+TEST(job_yaml, NastyStringsRoundTripExactly) {
+  const fs::path dir = tempDir("strings");
+  for (const char* nasty : kNastyStrings) {
+    vgr::config::JobFile j;
+    j.folder = dir.string();
+    j.name = nasty;
+    j.calibration = nasty;
+    j.grasps = {{1, 2}};
+    j.taught.grasp = j.grasps.front();
+    j.taught.params["text"] = nasty;
+    if (std::string(nasty) != "") j.templateImage = nasty;
+    ASSERT_TRUE(vgr::config::writeJob(j).has_value()) << nasty;
+    auto back = vgr::config::loadJob(dir.string());
+    ASSERT_TRUE(back.has_value()) << nasty << ": " << back.error().message << "\n" << vgr::config::jobYaml(j);
+    EXPECT_EQ(back->name, j.name);
+    EXPECT_EQ(back->calibration, j.calibration);
+    EXPECT_EQ(back->templateImage, j.templateImage);
+    EXPECT_EQ(back->taught.params.at("text"), j.taught.params.at("text"));
+  }
+  fs::remove_all(dir);
+}
+
+TEST(job_yaml, NumbersRoundTripExactly) {
+  const fs::path dir = tempDir("numbers");
+  vgr::config::JobFile j;
+  j.folder = dir.string();
+  j.grasps = {{0.1, 1.0 / 3}, {-123456.78901234567, 1e-7}};
+  j.taught.grasp = j.grasps.front();
+  j.taught.minScore = 0.7000000000000001;
+  j.taught.angleMinDeg = -179.99999999999997;
+  j.taught.angleMaxDeg = std::nextafter(90.0, 100.0);
+  j.partHeightMm = 2.0 / 3;
+  j.referenceXMm = -0.0;
+  j.referenceYMm = 999999.9999999999;
+  j.referenceZMm = 5e-324;
+  j.referenceRzDeg = -359.1;
+  j.taught.regions.push_back({{{0.30000000000000004, 0}, {10.5, 1e-9}, {std::acos(-1.0), 7}}, 12.345678901234567, 0.1});
+  ASSERT_TRUE(vgr::config::writeJob(j).has_value());
+  auto back = vgr::config::loadJob(dir.string());
+  ASSERT_TRUE(back.has_value()) << back.error().message;
+  ASSERT_EQ(back->grasps.size(), 2u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(back->grasps[i].u, j.grasps[i].u);
+    EXPECT_EQ(back->grasps[i].v, j.grasps[i].v);
+  }
+  EXPECT_EQ(back->taught.minScore, j.taught.minScore);
+  EXPECT_EQ(back->taught.angleMinDeg, j.taught.angleMinDeg);
+  EXPECT_EQ(back->taught.angleMaxDeg, j.taught.angleMaxDeg);
+  EXPECT_EQ(back->partHeightMm, j.partHeightMm);
+  EXPECT_EQ(back->referenceXMm, 0.0);
+  EXPECT_EQ(back->referenceYMm, j.referenceYMm);
+  EXPECT_EQ(back->referenceZMm, j.referenceZMm);
+  EXPECT_EQ(back->referenceRzDeg, j.referenceRzDeg);
+  ASSERT_EQ(back->taught.regions.size(), 1u);
+  EXPECT_EQ(back->taught.regions[0].heightMm, j.taught.regions[0].heightMm);
+  EXPECT_EQ(back->taught.regions[0].heightFactor, 0.1);
+  ASSERT_EQ(back->taught.regions[0].polygon.size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(back->taught.regions[0].polygon[i].u, j.taught.regions[0].polygon[i].u);
+    EXPECT_EQ(back->taught.regions[0].polygon[i].v, j.taught.regions[0].polygon[i].v);
+  }
+  fs::remove_all(dir);
+}
+
+TEST(job_yaml, ParameterErrorsNameFileAndLine) {
+  vgr::config::JobFile j;
+  j.folder = "JOB";
+  j.method = "moments";
+  j.grasps = {{10, 10}};
+  j.taught.params["min_area_px"] = "50";
+  j.taught.params["threshold"] = "300";
+  const std::string yaml = vgr::config::jobYaml(j);
+  auto job = vgr::config::parseJob(yaml, "JOB/job.yaml", "JOB");
+  ASSERT_TRUE(job.has_value()) << job.error().message;
+  const auto& src = job->taught.paramSources;
+  ASSERT_EQ(src.count("threshold"), 1u);
+  EXPECT_EQ(src.at("threshold").file, "JOB/job.yaml");
+  EXPECT_EQ(src.at("threshold").line, lineOf(yaml, "threshold:"));
+
+  cv::Mat templ(64, 64, CV_8UC1, cv::Scalar(0));
+  templ(cv::Rect(16, 16, 32, 32)).setTo(255);
+  auto bad = vgr::vision::makeLocator("moments", templ, job->taught);
+  ASSERT_FALSE(bad.has_value());
+  EXPECT_EQ(bad.error().message,
+            fmt::format("moments: parameter 'threshold': expected an integer in [0, 255], got '300' "
+                        "(JOB/job.yaml:{}: key 'params.threshold')",
+                        lineOf(yaml, "threshold:")));
+
+  job->taught.params.erase("threshold");
+  job->taught.params["treshold"] = "10";
+  job->taught.paramSources["treshold"] = {"JOB/job.yaml", 7};
+  bad = vgr::vision::makeLocator("moments", templ, job->taught);
+  ASSERT_FALSE(bad.has_value());
+  EXPECT_EQ(bad.error().message, "moments: unknown parameter 'treshold' (JOB/job.yaml:7: key 'params.treshold')");
+}
+
+}  // namespace
