@@ -1,9 +1,12 @@
 #include "sim/dataset.hpp"
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <utility>
 
 #include <fmt/core.h>
+#include <yaml-cpp/yaml.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
@@ -30,24 +33,36 @@ Result<PartTemplate> writePartTemplate(const PartSceneRenderer& renderer, const 
   cv::Mat templ;
   const PartTemplate t = renderer.renderTemplate(templ);
   if (!cv::imwrite((dir / "template.png").string(), templ)) return fail(Status::Internal, fmt::format("{}/template.png: cannot write", dirName));
-  std::string ty = fmt::format(
-      "# Template of the rendered part (vgr sim render, vgr demo): alone under the optical axis, rz = 0.\n"
-      "# Teach a job on it: vgr teach --image template.png --grasp {:.3f},{:.3f} --regions template.yaml --out JOB\n"
-      "image: template.png\n"
-      "grasp: {{x_px: {:.4f}, y_px: {:.4f}}}   # template px, pixel centres at integers, y down\n"
-      "grasp_height_mm: {:.3f}\n"
-      "crop_offset: {{x_px: {}, y_px: {}}}     # template px + offset = px of the full image\n"
-      "# Top faces of the part's levels in template px (paper 000's contour regions); height_factor\n"
-      "# 1 at the grasp point's height, 0.1 elsewhere (paper 000, eq. 4: far less than 1).\n"
-      "regions:\n",
-      t.graspU, t.graspV, t.graspU, t.graspV, renderer.part().graspHeightMm, t.offsetX, t.offsetY);
+  const double graspHeightMm = renderer.part().graspHeightMm;
+  YAML::Emitter y;
+  y << YAML::Comment(fmt::format(
+      "Template of the rendered part (vgr sim render, vgr demo): alone under the optical axis, rz = 0.\n"
+      "Teach a job on it: vgr teach --image template.png --grasp {:.3f},{:.3f} --regions template.yaml --out JOB",
+      t.graspU, t.graspV));
+  y << YAML::BeginMap;
+  y << YAML::Key << "image" << YAML::Value << "template.png";
+  y << YAML::Key << "grasp" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "x_px" << YAML::Value
+    << fmt::format("{:.4f}", t.graspU) << YAML::Key << "y_px" << YAML::Value << fmt::format("{:.4f}", t.graspV)
+    << YAML::EndMap << YAML::Comment("template px, pixel centres at integers, y down");
+  y << YAML::Key << "grasp_height_mm" << YAML::Value << fmt::format("{:.3f}", graspHeightMm);
+  y << YAML::Key << "crop_offset" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "x_px" << YAML::Value
+    << t.offsetX << YAML::Key << "y_px" << YAML::Value << t.offsetY << YAML::EndMap
+    << YAML::Comment("template px + offset = px of the full image");
+  y << YAML::Newline
+    << YAML::Comment("Top faces of the part's levels in template px (paper 000's contour regions); height_factor\n"
+                     "1 at the grasp point's height, 0.1 elsewhere (paper 000, eq. 4: far less than 1).");
+  y << YAML::Key << "regions" << YAML::Value;
+  if (t.regions.empty()) y << YAML::Flow;
+  y << YAML::BeginSeq;
   for (const auto& r : t.regions) {
-    ty += fmt::format("  - height_mm: {:.3f}\n    height_factor: {}\n    polygon: [", r.heightMm,
-                      std::abs(r.heightMm - renderer.part().graspHeightMm) < 1e-6 ? "1.0" : "0.1");
-    for (std::size_t i = 0; i < r.polygon.size(); ++i)
-      ty += fmt::format("{}[{:.2f}, {:.2f}]", i ? ", " : "", r.polygon[i].u, r.polygon[i].v);
-    ty += "]\n";
+    y << YAML::BeginMap << YAML::Key << "height_mm" << YAML::Value << fmt::format("{:.3f}", r.heightMm) << YAML::Key
+      << "height_factor" << YAML::Value << (std::abs(r.heightMm - graspHeightMm) < 1e-6 ? "1.0" : "0.1") << YAML::Key
+      << "polygon" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+    for (const auto& p : r.polygon) y << YAML::BeginSeq << fmt::format("{:.2f}", p.u) << fmt::format("{:.2f}", p.v) << YAML::EndSeq;
+    y << YAML::EndSeq << YAML::EndMap;
   }
+  y << YAML::EndSeq << YAML::EndMap;
+  const std::string ty = std::string(y.c_str()) + "\n";
   if (auto w = writeText(dir / "template.yaml", ty); !w) return std::unexpected(w.error());
   return t;
 }
@@ -65,16 +80,31 @@ Result<DatasetSummary> writeDataset(const DatasetOptions& o) {
 
   if (auto t = writePartTemplate(renderer, o.outDir); !t) return std::unexpected(t.error());
 
-  const std::string ds = fmt::format(
-      "# How this dataset was made (vgr sim render); truth is in truth.csv.\n"
-      "part: {}\nlevels: {}\ncount: {}\nseed: {}\nwidth: {}\nheight: {}\n"
-      "angle_range_deg: {}\nparts_per_image: {}\nempty_ratio: {}\nclutter: {}\nnoise_sigma: {}\n"
-      "blur_sigma: {}\nillum_ratio: {}\ndecoys: {}\n"
-      "# Pinhole camera looking straight down; base frame origin on the plane under the optical centre.\n"
-      "camera: {{fx: {:.4f}, fy: {:.4f}, cx: {:.2f}, cy: {:.2f}, height_mm: {}}}\n",
-      o.part, o.part == "flat" ? 1 : o.levels, o.count, s.seed, s.width, s.height, s.angleRangeDeg, s.partsPerImage,
-      s.emptyRatio, s.clutter, s.noiseSigma, s.blurSigma, s.illumRatio, s.decoys, renderer.focalPx(), renderer.focalPx(),
-      (s.width - 1) / 2.0, (s.height - 1) / 2.0, s.cameraHeightMm);
+  YAML::Emitter d;
+  d << YAML::Comment("How this dataset was made (vgr sim render); truth is in truth.csv.");
+  d << YAML::BeginMap;
+  d << YAML::Key << "part" << YAML::Value << o.part;
+  d << YAML::Key << "levels" << YAML::Value << (o.part == "flat" ? 1 : o.levels);
+  d << YAML::Key << "count" << YAML::Value << o.count;
+  d << YAML::Key << "seed" << YAML::Value << fmt::format("{}", s.seed);
+  d << YAML::Key << "width" << YAML::Value << s.width;
+  d << YAML::Key << "height" << YAML::Value << s.height;
+  const std::pair<const char*, double> numbers[] = {
+      {"angle_range_deg", s.angleRangeDeg}, {"parts_per_image", static_cast<double>(s.partsPerImage)},
+      {"empty_ratio", s.emptyRatio},        {"clutter", static_cast<double>(s.clutter)},
+      {"noise_sigma", s.noiseSigma},        {"blur_sigma", s.blurSigma},
+      {"illum_ratio", s.illumRatio},        {"decoys", static_cast<double>(s.decoys)}};
+  for (const auto& [key, value] : numbers) d << YAML::Key << key << YAML::Value << fmt::format("{}", value);
+  d << YAML::Newline
+    << YAML::Comment("Pinhole camera looking straight down; base frame origin on the plane under the optical centre.");
+  d << YAML::Key << "camera" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "fx" << YAML::Value
+    << fmt::format("{:.4f}", renderer.focalPx()) << YAML::Key << "fy" << YAML::Value
+    << fmt::format("{:.4f}", renderer.focalPx()) << YAML::Key << "cx" << YAML::Value
+    << fmt::format("{:.2f}", (s.width - 1) / 2.0) << YAML::Key << "cy" << YAML::Value
+    << fmt::format("{:.2f}", (s.height - 1) / 2.0) << YAML::Key << "height_mm" << YAML::Value
+    << fmt::format("{}", s.cameraHeightMm) << YAML::EndMap;
+  d << YAML::EndMap;
+  const std::string ds = std::string(d.c_str()) + "\n";
   if (auto w = writeText(dir / "dataset.yaml", ds); !w) return std::unexpected(w.error());
 
   std::ofstream csv(dir / "truth.csv");
