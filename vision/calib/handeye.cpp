@@ -149,9 +149,7 @@ void refineJoint(const Problem& p, Iso& x, Iso& y, double sigmaPx, double sigmaM
     const Eigen::VectorXd g = jac.transpose() * r;
     bool improved = false;
     for (int tries = 0; tries < 10 && !improved; ++tries) {
-      Eigen::MatrixXd aug = jtj;
-      aug.diagonal() += lambda * jtj.diagonal().cwiseMax(1e-9);
-      const Eigen::VectorXd dlt = -aug.ldlt().solve(g);
+      const Eigen::VectorXd dlt = dampedStep(jtj, g, lambda);
       const Iso xc = step(x, dlt.segment<6>(0)), yc = step(y, dlt.segment<6>(6));
       std::vector<Iso> cc(n);
       for (std::size_t i = 0; i < n; ++i) cc[i] = step(c[i], dlt.segment<6>(12 + 6 * static_cast<Eigen::Index>(i)));

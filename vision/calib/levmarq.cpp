@@ -35,9 +35,7 @@ double levenbergMarquardt(std::vector<Iso>& params, const std::function<Eigen::V
     const Eigen::VectorXd g = jac.transpose() * r;
     bool improved = false;
     for (int tries = 0; tries < 10 && !improved; ++tries) {
-      Eigen::MatrixXd aug = jtj;
-      aug.diagonal() += lambda * jtj.diagonal().cwiseMax(1e-9);
-      const Eigen::VectorXd step = -aug.ldlt().solve(g);
+      const Eigen::VectorXd step = dampedStep(jtj, g, lambda);
       const std::vector<Iso> cand = perturbed(params, step);
       const Eigen::VectorXd rc = f(cand);
       const double cc = rc.squaredNorm();
@@ -56,6 +54,12 @@ double levenbergMarquardt(std::vector<Iso>& params, const std::function<Eigen::V
     if (!improved) break;
   }
   return std::sqrt(cost / static_cast<double>(r.size()));
+}
+
+Eigen::VectorXd dampedStep(const Eigen::MatrixXd& jtj, const Eigen::VectorXd& g, double lambda) {
+  Eigen::MatrixXd aug = jtj;
+  aug.diagonal() += lambda * jtj.diagonal().cwiseMax(1e-9);
+  return -aug.ldlt().solve(g);
 }
 
 }  // namespace vgr::vision::calib

@@ -20,4 +20,9 @@ namespace vgr::vision::calib {
 double levenbergMarquardt(std::vector<se3::Iso>& params,
                           const std::function<Eigen::VectorXd(const std::vector<se3::Iso>&)>& f, int maxIter = 50);
 
+// One damped step of Levenberg-Marquardt with Marquardt's scaling: solves
+// (JtJ + lambda diag(JtJ)) step = -g, the diagonal floored at 1e-9 (a parameter the residuals
+// do not see). For LM loops with their own Jacobian structure (the joint hand-eye refinement).
+Eigen::VectorXd dampedStep(const Eigen::MatrixXd& jtj, const Eigen::VectorXd& g, double lambda);
+
 }  // namespace vgr::vision::calib
