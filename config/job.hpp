@@ -22,7 +22,7 @@ struct JobFile {
   // Grasp points in template px; the first is the one the locator transfers
   // (taught.grasp), the others are kept for the robot program (e.g. alternative grips).
   std::vector<PixelPoint> grasps;
-  TaughtTemplate taught;           // grasp, ROI, thresholds, regions, method params
+  TaughtTemplate taught;                   // grasp, ROI, thresholds, regions, method params (+ where written)
   double partHeightMm = 0;                 // mm, [0, 1000]: grasp height above the conveyor plane
   // Reference pose the offsets are given from (robot base frame) and where the part lay in
   // the template (px, deg): the taught pose.
@@ -39,7 +39,9 @@ struct JobFile {
 Result<JobFile> loadJob(const std::string& folder);
 Result<JobFile> parseJob(const std::string& yamlText, const std::string& sourceName, const std::string& folder);
 
-// Writes FOLDER/job.yaml (the folder must exist). Round-trips through loadJob.
+// Writes FOLDER/job.yaml (the folder must exist) with yaml-cpp's emitter: every string is
+// escaped as YAML needs and every number written as the shortest text that reads back to
+// the same double, so loadJob returns the job exactly (paramSources aside).
 Result<void> writeJob(const JobFile& job);
 std::string jobYaml(const JobFile& job);
 

@@ -1,27 +1,12 @@
 #include "config/yaml_section.hpp"
 
-#include <algorithm>
 #include <utility>
-#include <vector>
 
 #include <fmt/core.h>
 
+#include "core/did_you_mean.hpp"
+
 namespace vgr::config {
-namespace {
-
-std::size_t editDistance(const std::string& a, const std::string& b) {
-  std::vector<std::size_t> prev(b.size() + 1), cur(b.size() + 1);
-  for (std::size_t j = 0; j <= b.size(); ++j) prev[j] = j;
-  for (std::size_t i = 1; i <= a.size(); ++i) {
-    cur[0] = i;
-    for (std::size_t j = 1; j <= b.size(); ++j)
-      cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] == b[j - 1] ? 0u : 1u)});
-    std::swap(prev, cur);
-  }
-  return prev[b.size()];
-}
-
-}  // namespace
 
 Section::Section(std::string file, YAML::Node node, std::string path)
     : file_(std::move(file)), node_(std::move(node)), path_(std::move(path)) {
@@ -96,14 +81,7 @@ void Section::finish(UnknownKeys style) const {
   for (const auto& kv : node_) {
     const std::string k = kv.first.as<std::string>();
     if (known_.count(k)) continue;
-    std::string best;
-    std::size_t bestD = 3;
-    if (style == UnknownKeys::Suggest) {
-      for (const auto& cand : known_) {
-        const std::size_t d = editDistance(k, cand);
-        if (d < bestD) bestD = d, best = cand;
-      }
-    }
+    const std::string best = style == UnknownKeys::Suggest ? closestName(k, known_) : std::string();
     fail(kv.first, k, best.empty() ? "unknown key" : "unknown key (did you mean '" + best + "'?)");
   }
 }

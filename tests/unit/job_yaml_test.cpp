@@ -129,7 +129,7 @@ TEST(job_yaml, ParameterErrorsNameFileAndLine) {
   job->taught.paramSources["treshold"] = {"JOB/job.yaml", 7};
   bad = vgr::vision::makeLocator("moments", templ, job->taught);
   ASSERT_FALSE(bad.has_value());
-  EXPECT_EQ(bad.error().message, "moments: unknown parameter 'treshold' (JOB/job.yaml:7: key 'params.treshold')");
+  EXPECT_EQ(bad.error().message, "moments: unknown parameter 'treshold' (did you mean 'threshold'?) (JOB/job.yaml:7: key 'params.treshold')");
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include <opencv2/core.hpp>
 
 #include "core/angles.hpp"
+#include "core/did_you_mean.hpp"
 #include "vision/locate/contour_weighted_locator.hpp"
 #include "vision/locate/hu_sift_locators.hpp"
 #include "vision/locate/moments_locator.hpp"
@@ -72,7 +73,11 @@ std::string ParamReader::whereWritten(const std::string& name) const {
 Result<void> ParamReader::finish() const {
   if (!error_.empty()) return fail(Status::BadArgument, error_);
   for (const auto& [name, value] : params_)
-    if (!used_.contains(name)) return fail(Status::BadArgument, fmt::format("{}: unknown parameter '{}'{}", method_, name, whereWritten(name)));
+    if (!used_.contains(name)) {
+      const std::string best = closestName(name, used_);
+      return fail(Status::BadArgument, fmt::format("{}: unknown parameter '{}'{}{}", method_, name,
+                                                   best.empty() ? "" : " (did you mean '" + best + "'?)", whereWritten(name)));
+    }
   return {};
 }
 

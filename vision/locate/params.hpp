@@ -4,6 +4,8 @@
 // followed, when the job reader recorded where the parameter was written
 // (TaughtTemplate::paramSources), by that place in the job reader's shape:
 //   " (JOB/job.yaml:9: key 'params.mu')".
+// An unknown name is "hu: unknown parameter 'treshold'", with " (did you mean 'threshold'?)"
+// when a name the method reads is within 2 edits (core/did_you_mean.hpp, as the cell config).
 // Usage: ParamReader r("hu", taught); x = r.number("threshold", 0, 0, 255); ...;
 //        if (auto e = r.finish(); !e) return std::unexpected(e.error());
 // The reader borrows the maps it is given: they must outlive it.
