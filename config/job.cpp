@@ -184,28 +184,70 @@ std::string jobYaml(const JobFile& j) {
   return std::string(y.c_str()) + "\n";
 }
 
-Result<void> writeJob(const JobFile& j) {
-  const std::string path = (std::filesystem::path(j.folder) / "job.yaml").string();
-  std::ofstream out(path);
-  out << jobYaml(j);
-  out.close();
-  if (!out) return fail(Status::Internal, path + ": cannot write");
-  return {};
-}
+Result<void> writeJob(const JobFile& j) { return writeTextFile((std::filesystem::path(j.folder) / "job.yaml").string(), jobYaml(j)); }
 
 Result<std::vector<TemplateRegion>> loadRegions(const std::string& path) {
-  try {
-    const YAML::Node root = YAML::LoadFile(path);
-    if (!root.IsMap()) return fail(Status::BadArgument, path + ": expected a mapping with a 'regions' list");
+  return readYamlFile<std::vector<TemplateRegion>>(path, [&](const YAML::Node& root) {
+    if (!root.IsMap()) throw SectionError{path + ": expected a mapping with a 'regions' list"};
     Section top(path, root, "");
     return parseRegions(top, top.get("regions"));
-  } catch (const SectionError& e) {
-    return fail(Status::BadArgument, e.message);
-  } catch (const YAML::BadFile&) {
-    return fail(Status::BadArgument, path + ": cannot open");
-  } catch (const YAML::Exception& e) {
-    return fail(Status::BadArgument, fmt::format("{}:{}: YAML syntax error: {}", path, e.mark.line + 1, e.msg));
+  });
+}
+
+std::string partTemplateYaml(const PartTemplateFile& t) {
+  YAML::Emitter y;
+  y << YAML::Comment(fmt::format(
+      "Template of the rendered part (vgr sim render, vgr demo): alone under the optical axis, rz = 0.\n"
+      "Teach a job on it: vgr teach --image {} --grasp {:.3f},{:.3f} --regions template.yaml --out JOB",
+      t.image, t.grasp.u, t.grasp.v));
+  y << YAML::BeginMap;
+  y << YAML::Key << "image" << YAML::Value << t.image;
+  y << YAML::Key << "grasp" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "x_px" << YAML::Value
+    << fmt::format("{:.4f}", t.grasp.u) << YAML::Key << "y_px" << YAML::Value << fmt::format("{:.4f}", t.grasp.v)
+    << YAML::EndMap << YAML::Comment("template px, pixel centres at integers, y down");
+  y << YAML::Key << "grasp_height_mm" << YAML::Value << fmt::format("{:.3f}", t.graspHeightMm);
+  y << YAML::Key << "crop_offset" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "x_px" << YAML::Value
+    << t.cropOffsetX << YAML::Key << "y_px" << YAML::Value << t.cropOffsetY << YAML::EndMap
+    << YAML::Comment("template px + offset = px of the full image");
+  y << YAML::Newline
+    << YAML::Comment("Top faces of the part's levels in template px (paper 000's contour regions); height_factor\n"
+                     "1 at the grasp point's height, 0.1 elsewhere (paper 000, eq. 4: far less than 1).");
+  y << YAML::Key << "regions" << YAML::Value;
+  if (t.regions.empty()) y << YAML::Flow;
+  y << YAML::BeginSeq;
+  for (const auto& r : t.regions) {
+    y << YAML::BeginMap << YAML::Key << "height_mm" << YAML::Value << fmt::format("{:.3f}", r.heightMm) << YAML::Key
+      << "height_factor" << YAML::Value << numberText(r.heightFactor) << YAML::Key << "polygon" << YAML::Value
+      << YAML::Flow << YAML::BeginSeq;
+    for (const auto& p : r.polygon) y << YAML::BeginSeq << fmt::format("{:.2f}", p.u) << fmt::format("{:.2f}", p.v) << YAML::EndSeq;
+    y << YAML::EndSeq << YAML::EndMap;
   }
+  y << YAML::EndSeq << YAML::EndMap;
+  return std::string(y.c_str()) + "\n";
+}
+
+Result<void> writePartTemplateFile(const std::string& path, const PartTemplateFile& t) {
+  return writeTextFile(path, partTemplateYaml(t));
+}
+
+Result<PartTemplateFile> loadPartTemplateFile(const std::string& path) {
+  return readYamlFile<PartTemplateFile>(path, [&](const YAML::Node& root) {
+    Section top(path, root, "");
+    if (!root || root.IsNull()) top.fail(root, "", "the file is empty");
+    PartTemplateFile t;
+    t.image = top.text("image", t.image);
+    Section grasp(path, top.get("grasp"), "grasp");
+    t.grasp = {grasp.number("x_px", 0, -1e6, 1e6), grasp.number("y_px", 0, -1e6, 1e6)};
+    grasp.finish();
+    t.graspHeightMm = top.number("grasp_height_mm", 0, 0, 1000);
+    Section crop(path, top.get("crop_offset"), "crop_offset");
+    t.cropOffsetX = crop.integer("x_px", 0, -65535, 65535);
+    t.cropOffsetY = crop.integer("y_px", 0, -65535, 65535);
+    crop.finish();
+    t.regions = parseRegions(top, top.get("regions"));
+    top.finish();
+    return t;
+  });
 }
 
 }  // namespace vgr::config

@@ -49,4 +49,21 @@ std::string jobYaml(const JobFile& job);
 // template.yaml) for `vgr teach --regions`.
 Result<std::vector<TemplateRegion>> loadRegions(const std::string& path);
 
+// template.yaml: the template to teach a job on, as `vgr sim render` and `vgr demo` write it
+// next to template.png (docs/datasets.md): the grasp point, its height, where the template
+// was cut from the full image and the part's levels as a `regions:` list in the job.yaml
+// schema. Written to a fixed precision a user copies from (grasp px 4 decimals, heights mm 3,
+// polygon px 2); the truth to score against is the dataset's truth.csv.
+struct PartTemplateFile {
+  std::string image = "template.png";  // relative to the file's folder
+  PixelPoint grasp;                    // template px
+  double graspHeightMm = 0;            // mm above the conveyor plane
+  int cropOffsetX = 0, cropOffsetY = 0;  // template px + offset = px of the full image
+  std::vector<TemplateRegion> regions;
+};
+std::string partTemplateYaml(const PartTemplateFile& t);
+Result<void> writePartTemplateFile(const std::string& path, const PartTemplateFile& t);
+// Errors: Status::BadArgument, "FILE:LINE: key 'k': what".
+Result<PartTemplateFile> loadPartTemplateFile(const std::string& path);
+
 }  // namespace vgr::config

@@ -1,5 +1,6 @@
 #include "config/yaml_section.hpp"
 
+#include <fstream>
 #include <utility>
 
 #include <fmt/core.h>
@@ -84,6 +85,14 @@ void Section::finish(UnknownKeys style) const {
     const std::string best = style == UnknownKeys::Suggest ? closestName(k, known_) : std::string();
     fail(kv.first, k, best.empty() ? "unknown key" : "unknown key (did you mean '" + best + "'?)");
   }
+}
+
+Result<void> writeTextFile(const std::string& path, const std::string& text) {
+  std::ofstream out(path);
+  out << text;
+  out.close();
+  if (!out) return fail(Status::Internal, path + ": cannot write");
+  return {};
 }
 
 }  // namespace vgr::config

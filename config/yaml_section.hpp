@@ -15,6 +15,8 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "core/result.hpp"
+
 namespace vgr::config {
 
 // Thrown by Section::fail(); caught by the parser's public function.
@@ -94,5 +96,24 @@ class Section {
   std::string path_;
   std::set<std::string> known_;
 };
+
+// Runs `parse` on the YAML file at `path`; SectionError, a file that cannot be opened
+// ("PATH: cannot open") and syntax errors ("PATH:LINE: YAML syntax error: ...") become
+// Status::BadArgument errors.
+template <class T>
+Result<T> readYamlFile(const std::string& path, const std::function<T(const YAML::Node&)>& parse) {
+  try {
+    return parse(YAML::LoadFile(path));
+  } catch (const SectionError& e) {
+    return fail(Status::BadArgument, e.message);
+  } catch (const YAML::BadFile&) {
+    return fail(Status::BadArgument, path + ": cannot open");
+  } catch (const YAML::Exception& e) {
+    return fail(Status::BadArgument, path + ":" + std::to_string(e.mark.line + 1) + ": YAML syntax error: " + e.msg);
+  }
+}
+
+// Writes `text` to `path`, replacing it; Status::Internal "PATH: cannot write" on failure.
+Result<void> writeTextFile(const std::string& path, const std::string& text);
 
 }  // namespace vgr::config

@@ -11,7 +11,9 @@
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 
+#include "config/dataset_file.hpp"
 #include "config/job.hpp"
+#include "sim/dataset.hpp"
 #include "vision/locate/locator.hpp"
 
 namespace {
@@ -130,6 +132,84 @@ TEST(job_yaml, ParameterErrorsNameFileAndLine) {
   bad = vgr::vision::makeLocator("moments", templ, job->taught);
   ASSERT_FALSE(bad.has_value());
   EXPECT_EQ(bad.error().message, "moments: unknown parameter 'treshold' (did you mean 'threshold'?) (JOB/job.yaml:7: key 'params.treshold')");
+}
+
+// What `vgr sim render` writes next to its images loads back through the readers `vgr eval`
+// and `vgr teach --regions` use.
+TEST(job_yaml, RenderedDatasetFilesLoadBack) {
+  const fs::path dir = tempDir("dataset");
+  vgr::sim::DatasetOptions d;
+  d.outDir = dir.string();
+  d.count = 1;
+  d.part = "multi";
+  d.levels = 3;
+  d.scene.width = 320;
+  d.scene.height = 256;
+  d.scene.seed = 7;
+  ASSERT_TRUE(vgr::sim::writeDataset(d).has_value());
+  auto ds = vgr::config::loadDatasetFile((dir / "dataset.yaml").string());
+  ASSERT_TRUE(ds.has_value()) << ds.error().message;
+  EXPECT_EQ(ds->part, "multi");
+  EXPECT_EQ(ds->levels, 3);
+  EXPECT_EQ(ds->count, 1);
+  EXPECT_EQ(ds->seed, 7u);
+  EXPECT_EQ(ds->width, 320);
+  EXPECT_DOUBLE_EQ(ds->cx, 159.5);
+  EXPECT_GT(ds->fx, 0);
+  auto tp = vgr::config::loadPartTemplateFile((dir / "template.yaml").string());
+  ASSERT_TRUE(tp.has_value()) << tp.error().message;
+  EXPECT_EQ(tp->image, "template.png");
+  EXPECT_EQ(tp->regions.size(), 3u);
+  EXPECT_GT(tp->graspHeightMm, 0);
+  auto regions = vgr::config::loadRegions((dir / "template.yaml").string());
+  ASSERT_TRUE(regions.has_value()) << regions.error().message;
+  EXPECT_EQ(regions->size(), 3u);
+  fs::remove_all(dir);
+}
+
+TEST(job_yaml, DatasetAndTemplateFilesRoundTrip) {
+  const fs::path dir = tempDir("files");
+  vgr::config::DatasetFile d;
+  d.part = "flat";
+  d.count = 12;
+  d.seed = 123456789012345ull;
+  d.width = 640;
+  d.height = 512;
+  d.angleRangeDeg = 12.5;
+  d.emptyRatio = 0.3;
+  d.fx = d.fy = 1000.25;
+  d.cx = 319.5;
+  d.cy = 255.5;
+  d.cameraHeightMm = 500;
+  ASSERT_TRUE(vgr::config::writeDatasetFile((dir / "dataset.yaml").string(), d).has_value());
+  auto db = vgr::config::loadDatasetFile((dir / "dataset.yaml").string());
+  ASSERT_TRUE(db.has_value()) << db.error().message;
+  EXPECT_EQ(db->seed, d.seed);
+  EXPECT_EQ(db->angleRangeDeg, d.angleRangeDeg);
+  EXPECT_EQ(db->emptyRatio, d.emptyRatio);
+  EXPECT_EQ(db->fx, d.fx);
+  EXPECT_EQ(db->cy, d.cy);
+  EXPECT_EQ(db->cameraHeightMm, d.cameraHeightMm);
+
+  vgr::config::PartTemplateFile t;
+  t.image = "part #1: \"A\".png";
+  t.grasp = {12.5, 7.25};
+  t.graspHeightMm = 20;
+  t.cropOffsetX = 100;
+  t.cropOffsetY = -3;
+  t.regions.push_back({{{0, 0}, {10.5, 0}, {10.25, 10}}, 20, 1});
+  ASSERT_TRUE(vgr::config::writePartTemplateFile((dir / "template.yaml").string(), t).has_value());
+  auto tb = vgr::config::loadPartTemplateFile((dir / "template.yaml").string());
+  ASSERT_TRUE(tb.has_value()) << tb.error().message;
+  EXPECT_EQ(tb->image, t.image);
+  EXPECT_EQ(tb->grasp.u, 12.5);
+  EXPECT_EQ(tb->grasp.v, 7.25);
+  EXPECT_EQ(tb->graspHeightMm, 20);
+  EXPECT_EQ(tb->cropOffsetY, -3);
+  ASSERT_EQ(tb->regions.size(), 1u);
+  EXPECT_EQ(tb->regions[0].polygon[2].u, 10.25);
+  EXPECT_EQ(tb->regions[0].heightFactor, 1);
+  fs::remove_all(dir);
 }
 
 }  // namespace
