@@ -105,7 +105,7 @@ TEST(job_yaml, NumbersRoundTripExactly) {
 TEST(job_yaml, ParameterErrorsNameFileAndLine) {
   vgr::config::JobFile j;
   j.folder = "JOB";
-  j.method = "moments";
+  j.method = "hu";
   j.grasps = {{10, 10}};
   j.taught.params["min_area_px"] = "50";
   j.taught.params["threshold"] = "300";
@@ -119,19 +119,19 @@ TEST(job_yaml, ParameterErrorsNameFileAndLine) {
 
   cv::Mat templ(64, 64, CV_8UC1, cv::Scalar(0));
   templ(cv::Rect(16, 16, 32, 32)).setTo(255);
-  auto bad = vgr::vision::makeLocator("moments", templ, job->taught);
+  auto bad = vgr::vision::makeLocator("hu", templ, job->taught);
   ASSERT_FALSE(bad.has_value());
   EXPECT_EQ(bad.error().message,
-            fmt::format("moments: parameter 'threshold': expected an integer in [0, 255], got '300' "
+            fmt::format("hu: parameter 'threshold': expected an integer in [0, 255], got '300' "
                         "(JOB/job.yaml:{}: key 'params.threshold')",
                         lineOf(yaml, "threshold:")));
 
   job->taught.params.erase("threshold");
   job->taught.params["treshold"] = "10";
   job->taught.paramSources["treshold"] = {"JOB/job.yaml", 7};
-  bad = vgr::vision::makeLocator("moments", templ, job->taught);
+  bad = vgr::vision::makeLocator("hu", templ, job->taught);
   ASSERT_FALSE(bad.has_value());
-  EXPECT_EQ(bad.error().message, "moments: unknown parameter 'treshold' (did you mean 'threshold'?) (JOB/job.yaml:7: key 'params.treshold')");
+  EXPECT_EQ(bad.error().message, "hu: unknown parameter 'treshold' (did you mean 'threshold'?) (JOB/job.yaml:7: key 'params.treshold')");
 }
 
 // What `vgr sim render` writes next to its images loads back through the readers `vgr eval`
