@@ -4,7 +4,6 @@
 #include <sys/socket.h>
 
 #include <algorithm>
-#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -15,111 +14,10 @@
 #include <yaml-cpp/yaml.h>
 
 #include "config/job.hpp"
+#include "config/yaml_section.hpp"
 
 namespace vgr::config {
 namespace {
-
-// Thrown inside the parser only; turned into an Error at the API boundary.
-struct ConfigError {
-  std::string message;
-};
-
-std::size_t editDistance(const std::string& a, const std::string& b) {
-  std::vector<std::size_t> prev(b.size() + 1), cur(b.size() + 1);
-  for (std::size_t j = 0; j <= b.size(); ++j) prev[j] = j;
-  for (std::size_t i = 1; i <= a.size(); ++i) {
-    cur[0] = i;
-    for (std::size_t j = 1; j <= b.size(); ++j)
-      cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] == b[j - 1] ? 0u : 1u)});
-    std::swap(prev, cur);
-  }
-  return prev[b.size()];
-}
-
-// Walks one YAML mapping, remembers which keys were read, and rejects the rest: a typo in
-// a key is an error naming the line, never a silently ignored setting.
-class Section {
- public:
-  Section(const std::string& file, YAML::Node node, std::string path)
-      : file_(file), node_(std::move(node)), path_(std::move(path)) {
-    if (node_ && !node_.IsNull() && !node_.IsMap()) fail(node_, "", "expected a mapping");
-  }
-
-  [[noreturn]] void fail(const YAML::Node& at, const std::string& key, const std::string& what) const {
-    std::ostringstream os;
-    os << file_ << ':' << (at.Mark().line >= 0 ? at.Mark().line + 1 : 0) << ": key '" << join(key) << "': " << what;
-    throw ConfigError{os.str()};
-  }
-
-  std::string join(const std::string& key) const {
-    if (path_.empty()) return key;
-    if (key.empty()) return path_;
-    return path_ + "." + key;
-  }
-
-  YAML::Node get(const std::string& key) {
-    known_.insert(key);
-    if (!node_ || !node_.IsMap()) return YAML::Node();
-    return node_[key];
-  }
-
-  template <class T>
-  void read(const std::string& key, T& out, std::function<bool(const T&)> valid = nullptr,
-            const std::string& range = "") {
-    YAML::Node n = get(key);
-    if (!n || n.IsNull()) return;  // absent or empty: keep the default
-    T v{};
-    try {
-      v = n.as<T>();
-    } catch (const YAML::Exception&) {
-      fail(n, key, "expected " + typeName<T>() + (range.empty() ? "" : " in " + range) + ", got '" + scalar(n) + "'");
-    }
-    if constexpr (std::is_floating_point_v<T>) {
-      if (!std::isfinite(v)) fail(n, key, "expected a finite number, got '" + scalar(n) + "'");
-    }
-    if (valid && !valid(v)) fail(n, key, "out of range: expected " + range + ", got '" + scalar(n) + "'");
-    out = v;
-  }
-
-  void require(const std::string& key) {
-    if (!node_ || !node_.IsMap() || !node_[key]) fail(node_, key, "required key is missing");
-  }
-
-  // After all reads: any key not read is unknown.
-  void finish() const {
-    if (!node_ || !node_.IsMap()) return;
-    for (const auto& kv : node_) {
-      const std::string k = kv.first.as<std::string>();
-      if (known_.count(k)) continue;
-      std::string best;
-      std::size_t bestD = 3;
-      for (const auto& cand : known_) {
-        const std::size_t d = editDistance(k, cand);
-        if (d < bestD) bestD = d, best = cand;
-      }
-      fail(kv.first, k, best.empty() ? "unknown key" : "unknown key (did you mean '" + best + "'?)");
-    }
-  }
-
-  const YAML::Node& node() const { return node_; }
-  const std::string& path() const { return path_; }
-  const std::string& file() const { return file_; }
-
- private:
-  static std::string scalar(const YAML::Node& n) { return n.IsScalar() ? n.Scalar() : std::string("<non-scalar>"); }
-  template <class T>
-  static std::string typeName() {
-    if constexpr (std::is_same_v<T, bool>) return "true or false";
-    else if constexpr (std::is_integral_v<T>) return "an integer";
-    else if constexpr (std::is_floating_point_v<T>) return "a number";
-    else return "a string";
-  }
-
-  std::string file_;
-  YAML::Node node_;
-  std::string path_;
-  std::set<std::string> known_;
-};
 
 template <class T>
 std::function<bool(const T&)> inRange(T lo, T hi) {
@@ -466,7 +364,7 @@ const JobConfig* CellConfig::findJob(int id) const {
 Result<CellConfig> parseCellConfig(const std::string& text, const std::string& sourceName) {
   try {
     return parse(YAML::Load(text), sourceName);
-  } catch (const ConfigError& e) {
+  } catch (const SectionError& e) {
     return fail(Status::BadArgument, e.message);
   } catch (const YAML::Exception& e) {
     // Syntax errors: yaml-cpp's mark is 0-based.

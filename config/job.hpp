@@ -3,14 +3,14 @@
 // and vgrd (cell config `jobs[].folder`) load. Parse -> validate; errors name the file,
 // the line and the key: "JOB/job.yaml:12: key 'regions[1].height_factor': expected ...".
 // Plain data, no images: the caller reads the template (templatePath()) and builds the
-// method with vision::makeLocator(method, template, taught).
+// method with vision::makeLocator(method, template, taught) (config links no vision code).
 #pragma once
 
 #include <string>
 #include <vector>
 
 #include "core/result.hpp"
-#include "vision/locate/locator.hpp"  // TaughtTemplate (plain structs; config links no vision code)
+#include "core/taught_template.hpp"
 
 namespace vgr::config {
 
@@ -21,8 +21,8 @@ struct JobFile {
   std::string templateImage = "template.png";  // relative to folder
   // Grasp points in template px; the first is the one the locator transfers
   // (taught.grasp), the others are kept for the robot program (e.g. alternative grips).
-  std::vector<vision::PixelPoint> grasps;
-  vision::TaughtTemplate taught;           // grasp, ROI, thresholds, regions, method params
+  std::vector<PixelPoint> grasps;
+  TaughtTemplate taught;                   // grasp, ROI, thresholds, regions, method params (+ where written)
   double partHeightMm = 0;                 // mm, [0, 1000]: grasp height above the conveyor plane
   // Reference pose the offsets are given from (robot base frame) and where the part lay in
   // the template (px, deg): the taught pose.
@@ -39,12 +39,31 @@ struct JobFile {
 Result<JobFile> loadJob(const std::string& folder);
 Result<JobFile> parseJob(const std::string& yamlText, const std::string& sourceName, const std::string& folder);
 
-// Writes FOLDER/job.yaml (the folder must exist). Round-trips through loadJob.
+// Writes FOLDER/job.yaml (the folder must exist) with yaml-cpp's emitter: every string is
+// escaped as YAML needs and every number written as the shortest text that reads back to
+// the same double, so loadJob returns the job exactly (paramSources aside).
 Result<void> writeJob(const JobFile& job);
 std::string jobYaml(const JobFile& job);
 
 // Reads a `regions:` list in the job.yaml schema from any YAML file (e.g. a dataset's
 // template.yaml) for `vgr teach --regions`.
-Result<std::vector<vision::TemplateRegion>> loadRegions(const std::string& path);
+Result<std::vector<TemplateRegion>> loadRegions(const std::string& path);
+
+// template.yaml: the template to teach a job on, as `vgr sim render` and `vgr demo` write it
+// next to template.png (docs/datasets.md): the grasp point, its height, where the template
+// was cut from the full image and the part's levels as a `regions:` list in the job.yaml
+// schema. Written to a fixed precision a user copies from (grasp px 4 decimals, heights mm 3,
+// polygon px 2); the truth to score against is the dataset's truth.csv.
+struct PartTemplateFile {
+  std::string image = "template.png";  // relative to the file's folder
+  PixelPoint grasp;                    // template px
+  double graspHeightMm = 0;            // mm above the conveyor plane
+  int cropOffsetX = 0, cropOffsetY = 0;  // template px + offset = px of the full image
+  std::vector<TemplateRegion> regions;
+};
+std::string partTemplateYaml(const PartTemplateFile& t);
+Result<void> writePartTemplateFile(const std::string& path, const PartTemplateFile& t);
+// Errors: Status::BadArgument, "FILE:LINE: key 'k': what".
+Result<PartTemplateFile> loadPartTemplateFile(const std::string& path);
 
 }  // namespace vgr::config

@@ -19,6 +19,7 @@
 #include "vision/calib/handeye.hpp"
 #include "vision/calib/intrinsics.hpp"
 #include "vision/calib/mapping.hpp"
+#include "vision/calib/robot_pose_file.hpp"
 #include "vision/calib/se3.hpp"
 
 namespace vgr::daemon {
@@ -322,32 +323,19 @@ int runCalibratePlane(const CalibPlaneOptions& o) {
 
 namespace {
 
-// One poses.txt line in the controller's own convention (docs/calibration.md).
-std::string poseLine(const std::string& format, const std::string& name, const Pose& p) {
-  if (format == "abb") return fmt::format("{} {:.4f} {:.4f} {:.4f} {:.9f} {:.9f} {:.9f} {:.9f}\n", name, p.x, p.y, p.z, p.qw, p.qx, p.qy, p.qz);
-  if (format == "fanuc") {
-    const EulerZyxDeg e = toEulerZyxDeg(p);
-    return fmt::format("{} {:.4f} {:.4f} {:.4f} {:.6f} {:.6f} {:.6f}\n", name, p.x, p.y, p.z, e.rx, e.ry, e.rz);
-  }
-  const Vec3 rv = toRotationVector(p);
-  return fmt::format("{} {:.7f} {:.7f} {:.7f} {:.9f} {:.9f} {:.9f}\n", name, p.x / 1000, p.y / 1000, p.z / 1000, rv.x, rv.y, rv.z);
-}
-
 // The views' images, poses.txt and truth.yaml (handeye.yaml layout, for `--truth`) in `dir`.
 int writeHandEyeSet(const sim::TrueCamera& cam, const calib::PatternSpec& spec, const sim::HandEyeScenario& s,
                     const CalibSynthOptions& o, const fs::path& dir) {
   sim::PlateRenderOptions ro;
-  std::ofstream pf(dir / "poses.txt");
-  pf << "# robot poses T_base_gripper as the controller reports them, one line per image\n";
-  pf << "format " << o.poseFormat << "\nunits " << (o.poseFormat == "ur" ? "m" : "mm") << "\n";
+  std::vector<calib::PoseEntry> poses;
   for (std::size_t i = 0; i < s.camFromPlate.size(); ++i) {
     ro.seed = o.seed * 1000 + i;
     const std::string name = fmt::format("pose_{:03d}.png", i);
     cv::imwrite((dir / name).string(), sim::renderPlate(cam, spec, s.camFromPlate[i], ro));
-    pf << poseLine(o.poseFormat, name, s.robotReported[i]);
+    poses.push_back({name, s.robotReported[i], 0});
     progress(i + 1, s.camFromPlate.size(), name, "rendered");
   }
-  pf.close();
+  if (auto w = calib::writePoseFile((dir / "poses.txt").string(), o.poseFormat, poses); !w) return bad(w.error().message);
   if (auto w = calib::writeHandEyeTruth((dir / "truth.yaml").string(), s.config, s.x, s.y); !w) return bad(w.error().message);
   return 0;
 }

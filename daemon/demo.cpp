@@ -16,6 +16,7 @@
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
+#include <yaml-cpp/yaml.h>
 
 #include "config/cell_config.hpp"
 #include "daemon/process.hpp"
@@ -120,8 +121,12 @@ Result<std::string> teachDemoJob(config::CellConfig cell, const std::string& bin
   if (a == std::string::npos || b == std::string::npos || s == std::string::npos || !(a < b && b < s))
     return fail(Status::BadArgument, "the embedded sim-cell.yaml has no jobs/sim sections where expected");
   yaml.replace(s, 6, "\nsim:\n  scene: " + cell.sim.scene + "\n");
-  yaml.replace(a, b - a, fmt::format("jobs:\n  - id: 1\n    name: taught-{}\n    folder: {}\n    angle_offset_deg: {:.6f}\n",
-                                     method, job, sim::baseXAxisImageAngleDeg(cell)));
+  YAML::Emitter jobs;  // the folder may hold any character: escaped by the emitter
+  jobs << YAML::BeginMap << YAML::Key << "jobs" << YAML::Value << YAML::BeginSeq << YAML::BeginMap << YAML::Key << "id"
+       << YAML::Value << 1 << YAML::Key << "name" << YAML::Value << "taught-" + method << YAML::Key << "folder"
+       << YAML::Value << job << YAML::Key << "angle_offset_deg" << YAML::Value
+       << fmt::format("{:.6f}", sim::baseXAxisImageAngleDeg(cell)) << YAML::EndMap << YAML::EndSeq << YAML::EndMap;
+  yaml.replace(a, b - a, std::string(jobs.c_str()) + "\n");
   const std::string path = work + "/sim-cell-taught.yaml";
   std::ofstream(path) << yaml;
   std::printf("vgr demo: taught a job of method %s on the textured part (%s), config %s\n", method.c_str(), job.c_str(), path.c_str());

@@ -14,8 +14,8 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <yaml-cpp/yaml.h>
 
+#include "config/dataset_file.hpp"
 #include "config/job.hpp"
 #include "vision/calib/plane_model.hpp"
 #include "vision/locate/locator.hpp"
@@ -110,22 +110,17 @@ struct DatasetGeometry {
 
 DatasetGeometry readGeometry(const std::string& folder) {
   DatasetGeometry g;
-  try {
-    const YAML::Node ds = YAML::LoadFile((std::filesystem::path(folder) / "dataset.yaml").string());
-    const YAML::Node tp = YAML::LoadFile((std::filesystem::path(folder) / "template.yaml").string());
-    const YAML::Node cam = ds["camera"];
-    g.fx = cam["fx"].as<double>();
-    g.cameraHeightMm = cam["height_mm"].as<double>();
-    g.camera.emplace(g.fx, cam["fy"].as<double>(), cam["cx"].as<double>(), cam["cy"].as<double>(),
-                     vision::PinholePlaneModel::downLookingCamera(0, 0, g.cameraHeightMm, 0), 0.0);
-    g.offsetX = tp["crop_offset"]["x_px"].as<double>();
-    g.offsetY = tp["crop_offset"]["y_px"].as<double>();
-    g.graspHeightMm = tp["grasp_height_mm"].as<double>();
-    for (const auto& r : tp["regions"]) g.heights.push_back(r["height_mm"].as<double>());
-    if (g.heights.empty()) g.heights.push_back(g.graspHeightMm);
-  } catch (const YAML::Exception&) {
-    g.camera.reset();  // not a vgr sim render dataset: fall back to the grasp-level similarity
-  }
+  const auto ds = config::loadDatasetFile((std::filesystem::path(folder) / "dataset.yaml").string());
+  const auto tp = config::loadPartTemplateFile((std::filesystem::path(folder) / "template.yaml").string());
+  if (!ds || !tp) return g;  // not a vgr sim render dataset: fall back to the grasp-level similarity
+  g.fx = ds->fx;
+  g.cameraHeightMm = ds->cameraHeightMm;
+  g.camera.emplace(ds->fx, ds->fy, ds->cx, ds->cy, vision::PinholePlaneModel::downLookingCamera(0, 0, g.cameraHeightMm, 0), 0.0);
+  g.offsetX = tp->cropOffsetX;
+  g.offsetY = tp->cropOffsetY;
+  g.graspHeightMm = tp->graspHeightMm;
+  for (const auto& r : tp->regions) g.heights.push_back(r.heightMm);
+  if (g.heights.empty()) g.heights.push_back(g.graspHeightMm);
   return g;
 }
 

@@ -8,6 +8,7 @@
 
 #include "sim/calib_scene.hpp"
 #include "vision/calib/handeye.hpp"
+#include "vision/calib/robot_pose_file.hpp"
 #include "vision/calib/se3.hpp"
 
 namespace {

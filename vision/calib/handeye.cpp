@@ -2,15 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
-#include <fstream>
 #include <functional>
-#include <sstream>
 
 #include <Eigen/Dense>
 #include <fmt/core.h>
 #include <opencv2/calib3d.hpp>
 
+#include "vision/calib/levmarq.hpp"
 #include "vision/calib/se3.hpp"
 
 namespace vgr::vision::calib {
@@ -92,65 +90,11 @@ void evaluate(const Problem& p, HandEyeMethodResult& m, const Iso& x, const Iso*
   m.y = se3::toPose(y);
 }
 
-// Levenberg-Marquardt on a product of SE(3) factors with left-multiplicative se(3) updates
-// T <- exp(xi) T (paper 003, eqs. 4-8). Hand-written on Eigen: the problem is tiny (6 or 12
-// parameters, ~2000 residuals), needs the manifold update that Eigen's unsupported
-// LevenbergMarquardt (plain R^n) lacks, and Ceres is not one of our dependencies.
-// Jacobians by central differences. Returns the final RMS of the residuals.
-double levenbergMarquardt(std::vector<Iso>& params, const std::function<Eigen::VectorXd(const std::vector<Iso>&)>& f,
-                          int maxIter = 50) {
-  const int np = static_cast<int>(params.size()) * 6;
-  Eigen::VectorXd r = f(params);
-  double cost = r.squaredNorm();
-  double lambda = 1e-3;
-  auto perturbed = [&](const std::vector<Iso>& base, const Eigen::VectorXd& delta) {
-    std::vector<Iso> out = base;
-    for (std::size_t k = 0; k < out.size(); ++k)
-      out[k] = se3::expSe3(delta.segment<6>(static_cast<Eigen::Index>(6 * k))) * out[k];
-    return out;
-  };
-  for (int it = 0; it < maxIter; ++it) {
-    Eigen::MatrixXd jac(r.size(), np);
-    for (int c = 0; c < np; ++c) {
-      // Step: 1e-4 mm in translation, 1e-6 rad in rotation (both well above rounding).
-      const double h = (c % 6) < 3 ? 1e-4 : 1e-6;
-      Eigen::VectorXd dp = Eigen::VectorXd::Zero(np), dm = Eigen::VectorXd::Zero(np);
-      dp(c) = h;
-      dm(c) = -h;
-      jac.col(c) = (f(perturbed(params, dp)) - f(perturbed(params, dm))) / (2 * h);
-    }
-    const Eigen::MatrixXd jtj = jac.transpose() * jac;
-    const Eigen::VectorXd g = jac.transpose() * r;
-    bool improved = false;
-    for (int tries = 0; tries < 10 && !improved; ++tries) {
-      Eigen::MatrixXd aug = jtj;
-      aug.diagonal() += lambda * jtj.diagonal().cwiseMax(1e-9);
-      const Eigen::VectorXd step = -aug.ldlt().solve(g);
-      const std::vector<Iso> cand = perturbed(params, step);
-      const Eigen::VectorXd rc = f(cand);
-      const double cc = rc.squaredNorm();
-      if (std::isfinite(cc) && cc < cost) {
-        const double rel = (cost - cc) / std::max(cost, 1e-30);
-        params = cand;
-        r = rc;
-        cost = cc;
-        lambda = std::max(lambda / 10, 1e-12);
-        improved = true;
-        if (rel < 1e-12) return std::sqrt(cost / static_cast<double>(r.size()));
-      } else {
-        lambda *= 10;
-      }
-    }
-    if (!improved) break;
-  }
-  return std::sqrt(cost / static_cast<double>(r.size()));
-}
-
 // Joint maximum-likelihood refinement of X, Y and a small correction C_i per robot pose
 // (A_i' = C_i A_i, C_i = exp(xi_i), paper 003 eqs. 4-8 for the parametrisation). Residuals:
 // reprojection / sigmaPx for every pattern point, and xi_i / (sigmaMm, sigmaRad) as the prior
-// that the controller's pose is right within its repeatability. Same hand-written LM as
-// above, with the Jacobian's block structure used: C_i only moves view i's residuals.
+// that the controller's pose is right within its repeatability. The same hand-written LM as
+// levmarq.hpp, with the Jacobian's block structure used: C_i only moves view i's residuals.
 void refineJoint(const Problem& p, Iso& x, Iso& y, double sigmaPx, double sigmaMm, double sigmaRad) {
   const std::size_t n = p.a.size(), m = p.obj.size();
   const Eigen::Index rowsPerView = static_cast<Eigen::Index>(2 * m + 6);
@@ -205,9 +149,7 @@ void refineJoint(const Problem& p, Iso& x, Iso& y, double sigmaPx, double sigmaM
     const Eigen::VectorXd g = jac.transpose() * r;
     bool improved = false;
     for (int tries = 0; tries < 10 && !improved; ++tries) {
-      Eigen::MatrixXd aug = jtj;
-      aug.diagonal() += lambda * jtj.diagonal().cwiseMax(1e-9);
-      const Eigen::VectorXd dlt = -aug.ldlt().solve(g);
+      const Eigen::VectorXd dlt = dampedStep(jtj, g, lambda);
       const Iso xc = step(x, dlt.segment<6>(0)), yc = step(y, dlt.segment<6>(6));
       std::vector<Iso> cc(n);
       for (std::size_t i = 0; i < n; ++i) cc[i] = step(c[i], dlt.segment<6>(12 + 6 * static_cast<Eigen::Index>(i)));
@@ -495,167 +437,6 @@ Result<HandEyeResult> calibrateHandEyeAuto(const std::vector<HandEyeView>& views
                              : fmt::format("configuration chosen by consistency: the other one failed: {}",
                                            other.error().message));
   return r;
-}
-
-namespace {
-
-// A pose as the 4 x 4 homogeneous matrix the files store.
-cv::Mat homogeneous(const Pose& p) {
-  const Eigen::Matrix4d m = se3::toIso(p).matrix();
-  cv::Mat out(4, 4, CV_64F);
-  for (int i = 0; i < 4; ++i)
-    for (int j = 0; j < 4; ++j) out.at<double>(i, j) = m(i, j);
-  return out;
-}
-
-}  // namespace
-
-Result<void> writeHandEyeTruth(const std::string& path, HandEyeConfig config, const Pose& x, const Pose& y) {
-  try {
-    cv::FileStorage f(path, cv::FileStorage::WRITE);
-    if (!f.isOpened()) return fail(Status::BadArgument, fmt::format("{}: cannot open for writing", path));
-    f << "calibration_kind" << "handeye_truth" << "configuration" << handEyeConfigName(config);
-    f << "x" << homogeneous(x) << "y" << homogeneous(y) << "method" << "truth";
-  } catch (const cv::Exception& e) {
-    return fail(Status::BadArgument, fmt::format("{}: {}", path, e.what()));
-  }
-  return {};
-}
-
-Result<void> writeHandEye(const std::string& path, const HandEyeResult& r) {
-  try {
-    cv::FileStorage fs(path, cv::FileStorage::WRITE);
-    if (!fs.isOpened()) return fail(Status::BadArgument, fmt::format("{}: cannot open for writing", path));
-    const auto& b = r.bestResult();
-    const auto mat = homogeneous;
-    fs << "calibration_kind" << "handeye";
-    fs << "configuration" << handEyeConfigName(r.config);
-    fs << "x_meaning" << (r.config == HandEyeConfig::EyeInHand ? "T_gripper_cam" : "T_base_cam");
-    fs << "y_meaning" << (r.config == HandEyeConfig::EyeInHand ? "T_base_target" : "T_gripper_target");
-    fs << "x" << mat(b.x) << "y" << mat(b.y);
-    fs << "method" << b.method << "reason" << r.reason;
-    fs << "trans_resid_mm" << b.transResidMm << "rot_resid_deg" << b.rotResidDeg << "reproj_rms_px" << b.reprojRmsPx;
-    fs << "methods" << "[";
-    for (const auto& m : r.methods)
-      fs << "{" << "method" << m.method << "valid" << (m.valid ? 1 : 0) << "trans_resid_mm" << m.transResidMm
-         << "rot_resid_deg" << m.rotResidDeg << "reproj_rms_px" << m.reprojRmsPx << "note" << m.note << "}";
-    fs << "]";
-  } catch (const cv::Exception& e) {
-    return fail(Status::BadArgument, fmt::format("{}: {}", path, e.what()));
-  }
-  return {};
-}
-
-Result<HandEyeFile> readHandEye(const std::string& path) {
-  HandEyeFile f;
-  if (!std::filesystem::exists(path)) return fail(Status::NotCalibrated, fmt::format("{}: no such hand-eye file", path));
-  try {
-    cv::FileStorage fs(path, cv::FileStorage::READ);
-    if (!fs.isOpened()) return fail(Status::NotCalibrated, fmt::format("{}: cannot open hand-eye file", path));
-    const std::string cfg = static_cast<std::string>(fs["configuration"]);
-    if (cfg == "eye-in-hand") f.config = HandEyeConfig::EyeInHand;
-    else if (cfg == "eye-to-hand") f.config = HandEyeConfig::EyeToHand;
-    else return fail(Status::NotCalibrated, fmt::format("{}: key 'configuration': expected eye-in-hand or eye-to-hand, got '{}'", path, cfg));
-    for (const char* key : {"x", "y"}) {
-      cv::Mat m;
-      fs[key] >> m;
-      if (m.rows != 4 || m.cols != 4) return fail(Status::NotCalibrated, fmt::format("{}: key '{}': missing or not 4x4", path, key));
-      m.convertTo(m, CV_64F);
-      Iso t = Iso::Identity();
-      for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < 3; ++j) t.linear()(i, j) = m.at<double>(i, j);
-        t.translation()(i) = m.at<double>(i, 3);
-      }
-      if (!se3::isValidRigid(t)) return fail(Status::NotCalibrated, fmt::format("{}: key '{}': not a rigid transform", path, key));
-      (key[0] == 'x' ? f.x : f.y) = se3::toPose(t);
-    }
-    f.method = static_cast<std::string>(fs["method"]);
-    f.transResidMm = static_cast<double>(fs["trans_resid_mm"]);
-    f.rotResidDeg = static_cast<double>(fs["rot_resid_deg"]);
-    f.reprojRmsPx = static_cast<double>(fs["reproj_rms_px"]);
-  } catch (const cv::Exception& e) {
-    return fail(Status::NotCalibrated, fmt::format("{}: {}", path, e.what()));
-  }
-  return f;
-}
-
-Result<std::vector<PoseEntry>> parsePoseFile(const std::string& text, const std::string& src) {
-  enum class Fmt { None, Abb, Fanuc, Ur } format = Fmt::None;
-  double scale = 0;  // mm per unit
-  std::vector<PoseEntry> out;
-  std::istringstream in(text);
-  std::string line;
-  int lineNo = 0;
-  while (std::getline(in, line)) {
-    ++lineNo;
-    if (auto h = line.find('#'); h != std::string::npos) line.resize(h);
-    std::istringstream ls(line);
-    std::string first;
-    if (!(ls >> first)) continue;
-    if (first == "format" || first == "units") {
-      std::string val;
-      ls >> val;
-      if (first == "format") {
-        if (val == "abb") format = Fmt::Abb;
-        else if (val == "fanuc") format = Fmt::Fanuc;
-        else if (val == "ur") format = Fmt::Ur;
-        else return fail(Status::BadArgument, fmt::format("{}:{}: format '{}': expected abb, fanuc or ur", src, lineNo, val));
-      } else {
-        if (val == "mm") scale = 1;
-        else if (val == "m") scale = 1000;
-        else return fail(Status::BadArgument, fmt::format("{}:{}: units '{}': expected mm or m", src, lineNo, val));
-      }
-      continue;
-    }
-    if (format == Fmt::None || scale == 0)
-      return fail(Status::BadArgument, fmt::format("{}:{}: pose before the 'format abb|fanuc|ur' and 'units mm|m' lines", src, lineNo));
-    std::vector<double> v;
-    std::string tok;
-    while (ls >> tok) {
-      try {
-        std::size_t used = 0;
-        v.push_back(std::stod(tok, &used));
-        if (used != tok.size()) throw std::invalid_argument(tok);
-      } catch (const std::exception&) {
-        return fail(Status::BadArgument, fmt::format("{}:{}: '{}' is not a number", src, lineNo, tok));
-      }
-    }
-    const std::size_t want = format == Fmt::Abb ? 7 : 6;
-    if (v.size() != want)
-      return fail(Status::BadArgument, fmt::format("{}:{}: image '{}': {} numbers, expected {} ({})", src, lineNo, first,
-                                                   v.size(), want,
-                                                   format == Fmt::Abb     ? "x y z qw qx qy qz"
-                                                   : format == Fmt::Fanuc ? "x y z w p r"
-                                                                          : "x y z rx ry rz"));
-    Iso t = Iso::Identity();
-    t.translation() = Eigen::Vector3d(v[0], v[1], v[2]) * scale;
-    if (format == Fmt::Abb) {
-      const Eigen::Quaterniond q(v[3], v[4], v[5], v[6]);
-      if (std::abs(q.norm() - 1.0) > 1e-3)
-        return fail(Status::BadArgument, fmt::format("{}:{}: quaternion norm {:.6f}, expected 1", src, lineNo, q.norm()));
-      t.linear() = q.normalized().toRotationMatrix();
-    } else if (format == Fmt::Fanuc) {
-      t.linear() = (Eigen::AngleAxisd(v[5] * kDeg, Eigen::Vector3d::UnitZ()) *
-                    Eigen::AngleAxisd(v[4] * kDeg, Eigen::Vector3d::UnitY()) *
-                    Eigen::AngleAxisd(v[3] * kDeg, Eigen::Vector3d::UnitX()))
-                       .toRotationMatrix();
-    } else {
-      const Eigen::Vector3d rv(v[3], v[4], v[5]);
-      t.linear() = rv.norm() < 1e-15 ? Eigen::Matrix3d::Identity()
-                                     : Eigen::AngleAxisd(rv.norm(), rv.normalized()).toRotationMatrix();
-    }
-    out.push_back({first, se3::toPose(t), lineNo});
-  }
-  if (out.empty()) return fail(Status::BadArgument, fmt::format("{}: no poses", src));
-  return out;
-}
-
-Result<std::vector<PoseEntry>> loadPoseFile(const std::string& path) {
-  std::ifstream f(path);
-  if (!f) return fail(Status::BadArgument, fmt::format("{}: cannot open pose file", path));
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return parsePoseFile(ss.str(), path);
 }
 
 }  // namespace vgr::vision::calib

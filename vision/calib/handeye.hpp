@@ -76,8 +76,8 @@ Result<HandEyeResult> calibrateHandEye(const std::vector<HandEyeView>& views, co
 Result<HandEyeResult> calibrateHandEyeAuto(const std::vector<HandEyeView>& views, const CameraIntrinsics& cam,
                                            const PatternSpec& pattern, const HandEyeOptions& options = {});
 
-// handeye.yaml (OpenCV FileStorage): configuration, X and Y as 4x4 matrices (mm), the chosen
-// method, its residuals and every method's residuals.
+// handeye.yaml (OpenCV FileStorage; handeye_file.cpp): configuration, X and Y as 4x4
+// matrices (mm), the chosen method, its residuals and every method's residuals.
 Result<void> writeHandEye(const std::string& path, const HandEyeResult& r);
 // A synthetic set's truth in the same layout (`vgr calibrate handeye --truth` reads it).
 Result<void> writeHandEyeTruth(const std::string& path, HandEyeConfig config, const Pose& x, const Pose& y);
@@ -89,16 +89,6 @@ struct HandEyeFile {
 };
 Result<HandEyeFile> readHandEye(const std::string& path);
 
-// Robot pose files (docs/calibration.md, "poses.txt"): one line per image,
-//   <image> x y z a b c [d]
-// with "format abb|fanuc|ur" (abb: qw qx qy qz; fanuc: W P R deg, R = Rz(R) Ry(P) Rx(W);
-// ur: rotation vector rx ry rz rad) and "units mm|m" lines before the first pose.
-struct PoseEntry {
-  std::string image;
-  Pose baseFromGripper;  // mm
-  int line = 0;
-};
-Result<std::vector<PoseEntry>> parsePoseFile(const std::string& text, const std::string& sourceName);
-Result<std::vector<PoseEntry>> loadPoseFile(const std::string& path);
+// The robot pose file the views' baseFromGripper come from: vision/calib/robot_pose_file.hpp.
 
 }  // namespace vgr::vision::calib

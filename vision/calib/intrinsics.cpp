@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
 #include <set>
 
 #include <Eigen/Dense>
@@ -492,67 +491,6 @@ Result<IntrinsicsResult> calibrateIntrinsics(const std::vector<ViewDetection>& v
     cov.p2Sigmas = sd[7] > 0 ? std::abs(res.camera.dist[3]) / sd[7] : 0;
   }
   return res;
-}
-
-Result<void> writeIntrinsics(const std::string& path, const CameraIntrinsics& cam) {
-  try {
-    cv::FileStorage fs(path, cv::FileStorage::WRITE);
-    if (!fs.isOpened()) return fail(Status::BadArgument, fmt::format("{}: cannot open for writing", path));
-    fs << "calibration_kind" << "intrinsics";
-    fs << "image_width" << cam.imageSize.width << "image_height" << cam.imageSize.height;
-    fs << "camera_matrix" << cv::Mat(cam.cameraMatrix);
-    fs << "distortion_coefficients" << cv::Mat(cam.dist);
-    fs << "rms_px" << cam.rmsPx;
-    fs << "tangential_distortion" << (cam.tangential ? 1 : 0);
-    fs << "std_dev_intrinsics" << cv::Mat(cam.stdDev);  // fx fy cx cy k1 k2 p1 p2 k3
-    fs << "views" << "[";
-    for (const auto& v : cam.views)
-      fs << "{" << "name" << v.name << "rms_px" << v.rmsPx << "tilt_deg" << v.tiltDeg << "used" << (v.used ? 1 : 0) << "}";
-    fs << "]";
-  } catch (const cv::Exception& e) {
-    return fail(Status::BadArgument, fmt::format("{}: {}", path, e.what()));
-  }
-  return {};
-}
-
-Result<CameraIntrinsics> readIntrinsics(const std::string& path) {
-  CameraIntrinsics cam;
-  if (!std::filesystem::exists(path)) return fail(Status::NotCalibrated, fmt::format("{}: no such intrinsics file", path));
-  try {
-    cv::FileStorage fs(path, cv::FileStorage::READ);
-    if (!fs.isOpened()) return fail(Status::NotCalibrated, fmt::format("{}: cannot open intrinsics file", path));
-    cv::Mat k, d;
-    fs["camera_matrix"] >> k;
-    fs["distortion_coefficients"] >> d;
-    if (k.rows != 3 || k.cols != 3)
-      return fail(Status::NotCalibrated, fmt::format("{}: key 'camera_matrix': missing or not 3x3", path));
-    if (d.total() != 5)
-      return fail(Status::NotCalibrated, fmt::format("{}: key 'distortion_coefficients': expected 5 values", path));
-    k.convertTo(k, CV_64F);
-    d.convertTo(d, CV_64F);
-    cam.cameraMatrix = cv::Matx33d(k);
-    for (int i = 0; i < 5; ++i) cam.dist[i] = d.at<double>(i);
-    cam.imageSize = cv::Size(static_cast<int>(fs["image_width"]), static_cast<int>(fs["image_height"]));
-    cam.rmsPx = static_cast<double>(fs["rms_px"]);
-    if (!fs["tangential_distortion"].empty()) cam.tangential = static_cast<int>(fs["tangential_distortion"]) != 0;
-    if (!fs["std_dev_intrinsics"].empty()) {
-      cv::Mat sdm;
-      fs["std_dev_intrinsics"] >> sdm;
-      if (sdm.total() == 9) {
-        sdm.convertTo(sdm, CV_64F);
-        for (int i = 0; i < 9; ++i) cam.stdDev[i] = sdm.at<double>(i);
-      }
-    }
-    const cv::FileNode views = fs["views"];
-    for (const auto& n : views)
-      cam.views.push_back({static_cast<std::string>(n["name"]), static_cast<double>(n["rms_px"]),
-                           static_cast<double>(n["tilt_deg"]), static_cast<int>(n["used"]) != 0});
-  } catch (const cv::Exception& e) {
-    return fail(Status::NotCalibrated, fmt::format("{}: {}", path, e.what()));
-  }
-  if (!(cam.fx() > 0 && cam.fy() > 0) || cam.imageSize.width <= 0 || cam.imageSize.height <= 0)
-    return fail(Status::NotCalibrated, fmt::format("{}: focal lengths and image size must be positive", path));
-  return cam;
 }
 
 }  // namespace vgr::vision::calib

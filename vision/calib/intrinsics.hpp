@@ -126,8 +126,8 @@ struct IntrinsicsResult {
 Result<IntrinsicsResult> calibrateIntrinsics(const std::vector<ViewDetection>& views, const PatternSpec& spec,
                                              cv::Size imageSize, const IntrinsicsOptions& options = {});
 
-// OpenCV FileStorage YAML: camera_matrix, distortion_coefficients, image_width/height, rms_px,
-// per-view names/errors/used flags.
+// intrinsics.yaml (OpenCV FileStorage YAML; intrinsics_file.cpp): camera_matrix,
+// distortion_coefficients, image_width/height, rms_px, per-view names/errors/used flags.
 Result<void> writeIntrinsics(const std::string& path, const CameraIntrinsics& cam);
 Result<CameraIntrinsics> readIntrinsics(const std::string& path);
 

@@ -6,12 +6,11 @@
 #include <optional>
 
 #include "core/pose.hpp"
+#include "core/taught_template.hpp"  // PixelPoint
 
 namespace vgr::vision {
 
-struct PixelPoint {
-  double u = 0, v = 0;  // px: x right, y down, pixel centres at integers
-};
+using vgr::PixelPoint;  // core/taught_template.hpp: px, x right, y down, pixel centres at integers
 
 class PinholePlaneModel {
  public:

@@ -369,7 +369,7 @@ std::vector<cv::Point> templatePart(const cv::Mat& templ, int threshold) {
 
 Result<std::unique_ptr<Locator>> makeContourWeightedLocator(const cv::Mat& templateGray, const TaughtTemplate& taught) {
   const std::string name = "contour-weighted";
-  ParamReader r(name, taught.params);
+  ParamReader r(name, taught);
   CwParams p;
   p.orb.imageFeatures = 2000;  // per candidate crop
   p.threshold = r.integer("threshold", p.threshold, 0, 255);

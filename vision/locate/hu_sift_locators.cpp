@@ -317,7 +317,7 @@ class SiftLocator final : public Locator {
 }  // namespace
 
 Result<std::unique_ptr<Locator>> makeHuLocator(const cv::Mat& templateGray, const TaughtTemplate& taught) {
-  ParamReader r("hu", taught.params);
+  ParamReader r("hu", taught);
   HuParams p;
   p.threshold = r.integer("threshold", p.threshold, 0, 255);
   p.minAreaPx = r.number("min_area_px", p.minAreaPx, 1, 1e9);
@@ -340,7 +340,7 @@ Result<std::unique_ptr<Locator>> makeHuLocator(const cv::Mat& templateGray, cons
 }
 
 Result<std::unique_ptr<Locator>> makeSiftLocator(const cv::Mat& templateGray, const TaughtTemplate& taught) {
-  ParamReader r("sift", taught.params);
+  ParamReader r("sift", taught);
   SiftParams p;
   p.features = r.integer("features", p.features, 0, 100000);
   p.ratio = r.number("ratio", p.ratio, 0.1, 1.0);

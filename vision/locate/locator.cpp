@@ -8,6 +8,7 @@
 #include <opencv2/core.hpp>
 
 #include "core/angles.hpp"
+#include "core/did_you_mean.hpp"
 #include "vision/locate/contour_weighted_locator.hpp"
 #include "vision/locate/hu_sift_locators.hpp"
 #include "vision/locate/moments_locator.hpp"
@@ -59,13 +60,24 @@ bool ParamReader::flag(const std::string& name, bool fallback) {
 }
 
 void ParamReader::setError(const std::string& name, const std::string& expected, const std::string& got) {
-  if (error_.empty()) error_ = fmt::format("{}: parameter '{}': expected {}, got '{}'", method_, name, expected, got);
+  if (error_.empty())
+    error_ = fmt::format("{}: parameter '{}': expected {}, got '{}'{}", method_, name, expected, got, whereWritten(name));
+}
+
+std::string ParamReader::whereWritten(const std::string& name) const {
+  const auto it = sources_.find(name);
+  if (it == sources_.end()) return "";
+  return fmt::format(" ({}:{}: key 'params.{}')", it->second.file, it->second.line, name);
 }
 
 Result<void> ParamReader::finish() const {
   if (!error_.empty()) return fail(Status::BadArgument, error_);
   for (const auto& [name, value] : params_)
-    if (!used_.contains(name)) return fail(Status::BadArgument, fmt::format("{}: unknown parameter '{}'", method_, name));
+    if (!used_.contains(name)) {
+      const std::string best = closestName(name, used_);
+      return fail(Status::BadArgument, fmt::format("{}: unknown parameter '{}'{}{}", method_, name,
+                                                   best.empty() ? "" : " (did you mean '" + best + "'?)", whereWritten(name)));
+    }
   return {};
 }
 

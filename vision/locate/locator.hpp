@@ -11,14 +11,14 @@
 // Building (makeLocator) may be slow (pre-rotated models, pyramids); locate() is the hot path.
 #pragma once
 
-#include <map>
 #include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "core/result.hpp"
-#include "vision/calib/plane_model.hpp"  // PixelPoint
+#include "core/taught_template.hpp"  // PixelPoint, PixelRect, TemplateRegion, TaughtTemplate
+#include "vision/calib/plane_model.hpp"  // PixelPoint (vision::)
 
 namespace cv {
 class Mat;
@@ -26,32 +26,10 @@ class Mat;
 
 namespace vgr::vision {
 
-struct PixelRect {
-  int x = 0, y = 0, width = 0, height = 0;  // px
-  bool empty() const { return width <= 0 || height <= 0; }
-};
-
-// A contour region of a multi-height part (paper 000, eqs. 3-4): a polygon in template
-// pixels, its height above the conveyor plane (mm, 0 = on the plane) and the height factor
-// h_i of eq. 4 (1 = the grasp point's level).
-struct TemplateRegion {
-  std::vector<PixelPoint> polygon;  // template px, closed implicitly
-  double heightMm = 0;
-  double heightFactor = 1;
-};
-
-// What teaching produced, besides the template image itself.
-struct TaughtTemplate {
-  PixelPoint grasp;                     // grasp point, template px
-  PixelRect searchRoi;                  // where to search in live images; empty = whole image
-  double minScore = 0.5;                // [0, 1]: weaker candidates are not parts
-  int maxParts = 1;                     // [1, 64]: at most this many parts per image
-  double angleMinDeg = -180, angleMaxDeg = 180;  // search range relative to the template
-  std::vector<TemplateRegion> regions;  // empty = the method splits its own (paper 000)
-  // Method parameters from job.yaml, by name, as written there (the method parses and
-  // range-checks them; an unknown name is an error naming it).
-  std::map<std::string, std::string> params;
-};
+// Plain teaching data (core/taught_template.hpp), under the names vision has always used.
+using vgr::PixelRect;
+using vgr::TaughtTemplate;
+using vgr::TemplateRegion;
 
 struct Detection {
   double u = 0, v = 0;    // grasp point in the live image, px

@@ -130,7 +130,7 @@ class MomentsLocator final : public Locator {
 }  // namespace
 
 Result<std::unique_ptr<Locator>> makeMomentsLocator(const cv::Mat& templateGray, const TaughtTemplate& taught) {
-  ParamReader r("moments", taught.params);
+  ParamReader r("moments", taught);
   MomentsParams p;
   p.threshold = r.integer("threshold", 0, 0, 255);
   p.minAreaPx = r.number("min_area_px", p.minAreaPx, 1, 1e9);

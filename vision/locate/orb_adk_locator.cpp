@@ -198,7 +198,7 @@ class OrbAdkLocator final : public Locator {
 }  // namespace
 
 Result<std::unique_ptr<Locator>> makeOrbAdkLocator(const cv::Mat& templateGray, const TaughtTemplate& taught) {
-  ParamReader r("orb-adk", taught.params);
+  ParamReader r("orb-adk", taught);
   detail::OrbParams orb;
   detail::readOrbParams(r, orb);
   detail::FeatureSearch search;

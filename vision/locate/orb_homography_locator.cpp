@@ -54,7 +54,7 @@ class OrbHomographyLocator final : public Locator {
 
 Result<std::unique_ptr<Locator>> make(const std::string& name, int robust, const cv::Mat& templateGray,
                                       const TaughtTemplate& taught) {
-  ParamReader r(name, taught.params);
+  ParamReader r(name, taught);
   detail::OrbParams orb;
   detail::readOrbParams(r, orb);
   detail::FeatureSearch search;

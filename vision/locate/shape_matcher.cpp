@@ -659,7 +659,7 @@ Result<ShapeParams> parseShapeParams(const TaughtTemplate& taught) {
   // "polarity" is a word, which ParamReader does not read: take it out, check it here.
   std::map<std::string, std::string> numeric = taught.params;
   numeric.erase("polarity");
-  ParamReader r("shape", numeric);
+  ParamReader r("shape", numeric, taught.paramSources);
   ShapeParams p;
   p.levels = r.integer("levels", p.levels, 0, 7);
   p.modelContrast = r.number("model_contrast", p.modelContrast, 1, 255);
@@ -681,7 +681,8 @@ Result<ShapeParams> parseShapeParams(const TaughtTemplate& taught) {
       p.polarity = ShapePolarity::IgnoreLocal;
     } else {
       return fail(Status::BadArgument,
-                  fmt::format("shape: parameter 'polarity': expected use, ignore_global or ignore_local, got '{}'", it->second));
+                  fmt::format("shape: parameter 'polarity': expected use, ignore_global or ignore_local, got '{}'{}",
+                              it->second, r.whereWritten("polarity")));
     }
   }
   if (taught.minScore < 0 || taught.minScore > 1)

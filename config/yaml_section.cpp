@@ -1,0 +1,98 @@
+#include "config/yaml_section.hpp"
+
+#include <fstream>
+#include <utility>
+
+#include <fmt/core.h>
+
+#include "core/did_you_mean.hpp"
+
+namespace vgr::config {
+
+Section::Section(std::string file, YAML::Node node, std::string path)
+    : file_(std::move(file)), node_(std::move(node)), path_(std::move(path)) {
+  if (node_ && !node_.IsNull() && !node_.IsMap()) fail(node_, "", "expected a mapping");
+}
+
+void Section::fail(const YAML::Node& at, const std::string& key, const std::string& what) const {
+  const int line = at.Mark().line >= 0 ? at.Mark().line + 1 : 0;
+  throw SectionError{fmt::format("{}:{}: key '{}': {}", file_, line, join(key), what)};
+}
+
+std::string Section::join(const std::string& key) const {
+  if (path_.empty()) return key;
+  if (key.empty()) return path_;
+  return key.front() == '[' ? path_ + key : path_ + "." + key;
+}
+
+YAML::Node Section::get(const std::string& key) {
+  known_.insert(key);
+  if (!node_ || !node_.IsMap()) return YAML::Node();
+  return node_[key];
+}
+
+bool Section::has(const std::string& key) {
+  const YAML::Node n = get(key);
+  return n && !n.IsNull();
+}
+
+void Section::require(const std::string& key) {
+  if (!node_ || !node_.IsMap() || !node_[key]) fail(node_, key, "required key is missing");
+}
+
+double Section::number(const std::string& key, double fallback, double lo, double hi) {
+  const YAML::Node n = get(key);
+  if (!n || n.IsNull()) return fallback;
+  return numberOf(n, key, lo, hi);
+}
+
+double Section::numberOf(const YAML::Node& n, const std::string& key, double lo, double hi) const {
+  double v = 0;
+  try {
+    v = n.as<double>();
+  } catch (const YAML::Exception&) {
+    fail(n, key, fmt::format("expected a number in [{}, {}], got '{}'", lo, hi, scalar(n)));
+  }
+  if (!std::isfinite(v) || v < lo || v > hi) fail(n, key, fmt::format("expected a number in [{}, {}], got '{}'", lo, hi, scalar(n)));
+  return v;
+}
+
+int Section::integer(const std::string& key, int fallback, int lo, int hi) {
+  const YAML::Node n = get(key);
+  if (!n || n.IsNull()) return fallback;
+  int v = 0;
+  try {
+    v = n.as<int>();
+  } catch (const YAML::Exception&) {
+    fail(n, key, fmt::format("expected an integer in [{}, {}], got '{}'", lo, hi, scalar(n)));
+  }
+  if (v < lo || v > hi) fail(n, key, fmt::format("expected an integer in [{}, {}], got '{}'", lo, hi, scalar(n)));
+  return v;
+}
+
+std::string Section::text(const std::string& key, const std::string& fallback) {
+  const YAML::Node n = get(key);
+  if (!n || n.IsNull()) return fallback;
+  if (!n.IsScalar()) fail(n, key, "expected a string");
+  return n.Scalar();
+}
+
+void Section::finish(UnknownKeys style) const {
+  if (!node_ || !node_.IsMap()) return;
+  for (const auto& kv : node_) {
+    const std::string k = kv.first.as<std::string>();
+    if (known_.count(k)) continue;
+    const std::string best = style == UnknownKeys::Suggest ? closestName(k, known_) : std::string();
+    fail(kv.first, k, best.empty() ? "unknown key" : "unknown key (did you mean '" + best + "'?)");
+  }
+}
+
+Result<void> writeTextFile(const std::string& path, const std::string& text) {
+  std::ofstream out(path);
+  out << text;
+  out.close();
+  if (!out) return fail(Status::Internal, path + ": cannot write");
+  return {};
+}
+
+}  // namespace vgr::config
