@@ -41,7 +41,7 @@ const char* triggerSourceName(TriggerSource s) {
   return "unknown";
 }
 
-CycleRunner::CycleRunner(const config::CellConfig& cell, CameraWorker& camera, CycleSinks sinks)
+CycleRunner::CycleRunner(const config::CellConfig& cell, drivers::CameraWorker& camera, CycleSinks sinks)
     : cell_(cell), camera_(camera), sinks_(std::move(sinks)), model_(modelFrom(cell.model)) {
   if (cell.calibration.enabled) {
     auto m = vision::calib::loadCellCalibration(cell.calibration.intrinsics, cell.calibration.handeye,

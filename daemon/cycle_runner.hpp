@@ -19,7 +19,7 @@
 
 #include "config/cell_config.hpp"
 #include "core/cycle.hpp"
-#include "daemon/camera_worker.hpp"
+#include "drivers/camera_worker.hpp"
 #include "vision/calib/mapping.hpp"
 #include "vision/calib/plane_model.hpp"
 #include "vision/locate/locator.hpp"
@@ -40,7 +40,7 @@ class CycleRunner {
  public:
   static constexpr std::size_t kQueueCapacity = 4;
 
-  CycleRunner(const config::CellConfig& cell, CameraWorker& camera, CycleSinks sinks);
+  CycleRunner(const config::CellConfig& cell, drivers::CameraWorker& camera, CycleSinks sinks);
   ~CycleRunner();
 
   // Start-up, before start(): builds the method of every job with a folder (job.yaml,
@@ -67,7 +67,7 @@ class CycleRunner {
   CycleResult runCycle(const Trigger& t);
 
   const config::CellConfig& cell_;
-  CameraWorker& camera_;
+  drivers::CameraWorker& camera_;
   CycleSinks sinks_;
   vision::PinholePlaneModel model_;
   // With a `calibration` section: the mapping from its files, or why they cannot be used

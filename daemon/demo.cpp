@@ -18,7 +18,7 @@
 #include <nlohmann/json.hpp>
 
 #include "config/cell_config.hpp"
-#include "daemon/process.hpp"
+#include "core/child_process.hpp"
 #include "sim/cell_scenes.hpp"
 #include "sim/dataset.hpp"
 

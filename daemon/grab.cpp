@@ -16,9 +16,9 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "config/cell_config.hpp"
-#include "daemon/camera_worker.hpp"
 #include "drivers/aravis_camera.hpp"
 #include "drivers/camera.hpp"
+#include "drivers/camera_worker.hpp"
 
 namespace vgr::daemon {
 namespace {
@@ -96,7 +96,7 @@ int runGrab(const GrabOptions& o) {
   }
   (*made)->close();
 
-  CameraWorker worker(cam, std::move(*made));
+  drivers::CameraWorker worker(cam, std::move(*made));
   if (!o.saveFolder.empty()) {
     std::error_code ec;
     std::filesystem::create_directories(o.saveFolder, ec);

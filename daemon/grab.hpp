@@ -20,7 +20,7 @@ struct GrabOptions {
   std::string saveFolder;   // if set: every frame received is written there as frame_<device frame id>.png
 };
 
-// Triggers `count` frames through the daemon's CameraWorker (re-trigger policy and
+// Triggers `count` frames through vgrd's CameraWorker (re-trigger policy and
 // reconnect included) and reports frames received, typed errors and trigger->frame latency
 // percentiles. Exit code: 0 when the run completed (errors are counted, not fatal), 1 when
 // the camera cannot be opened (the message names the camera and the setting), 2 on bad input.

@@ -13,11 +13,11 @@
 #include <boost/asio/steady_timer.hpp>
 
 #include "core/log.hpp"
-#include "daemon/camera_worker.hpp"
 #include "daemon/cycle_runner.hpp"
 #include "daemon/journal.hpp"
 #include "daemon/result_store.hpp"
 #include "drivers/camera.hpp"
+#include "drivers/camera_worker.hpp"
 #include "protocol/modbus_client_trigger.hpp"
 #include "protocol/modbus_server.hpp"
 #include "protocol/robot_server.hpp"
@@ -38,7 +38,7 @@ struct VgrdApp::Impl {
   asio::steady_timer watchdogTimer{io};
   asio::steady_timer statsTimer{io};
   Journal journal;
-  std::unique_ptr<CameraWorker> camera;
+  std::unique_ptr<drivers::CameraWorker> camera;
   std::unique_ptr<CycleRunner> cycles;
   std::unique_ptr<ResultStore> results;
   std::unique_ptr<protocol::ModbusServer> modbus;
@@ -141,7 +141,7 @@ Result<void> VgrdApp::start() {
 
   auto cam = drivers::makeCamera(s.cfg.camera);
   if (!cam) return std::unexpected(cam.error());
-  s.camera = std::make_unique<CameraWorker>(s.cfg.camera, std::move(*cam));
+  s.camera = std::make_unique<drivers::CameraWorker>(s.cfg.camera, std::move(*cam));
 
   std::set<int> jobs;
   for (const auto& j : s.cfg.jobs) jobs.insert(j.id);

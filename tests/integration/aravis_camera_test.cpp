@@ -9,16 +9,16 @@
 #include <opencv2/core.hpp>
 
 #include "config/cell_config.hpp"
-#include "daemon/camera_worker.hpp"
-#include "daemon/process.hpp"
+#include "core/child_process.hpp"
 #include "drivers/camera.hpp"
+#include "drivers/camera_worker.hpp"
 #include "sim/scene.hpp"
 #include "vision/locate/moments_locator.hpp"
 
 namespace {
 
 using std::chrono::milliseconds;
-using vgr::daemon::ChildProcess;
+using vgr::ChildProcess;
 
 vgr::config::CellConfig simCell() {
   auto cfg = vgr::config::parseCellConfig(vgr::config::embeddedSimCellYaml(), "embedded");
@@ -104,7 +104,7 @@ TEST(CameraWorker, ReconnectsAfterTheCameraComesBack) {
   auto emulator = startEmulator(1);
   auto cam = vgr::drivers::makeCamera(cfg.camera);
   ASSERT_TRUE(cam.has_value());
-  vgr::daemon::CameraWorker worker(cfg.camera, std::move(*cam));
+  vgr::drivers::CameraWorker worker(cfg.camera, std::move(*cam));
   worker.start();
   ASSERT_TRUE(worker.waitStreaming(milliseconds(5000)));
   vgr::drivers::Frame frame;

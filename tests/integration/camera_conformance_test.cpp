@@ -16,7 +16,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "config/cell_config.hpp"
-#include "daemon/process.hpp"
+#include "core/child_process.hpp"
 #include "drivers/camera.hpp"
 #include "sim/scene.hpp"
 
@@ -25,7 +25,7 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 using std::chrono::milliseconds;
-using vgr::daemon::ChildProcess;
+using vgr::ChildProcess;
 using vgr::drivers::CameraState;
 using vgr::drivers::FrameStatus;
 

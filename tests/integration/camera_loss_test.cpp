@@ -1,5 +1,5 @@
 // GVSP packet loss at full resolution: 1000 software triggers at 2448x2048 through `vgr grab`
-// (the real Aravis driver and the daemon's CameraWorker) against the emulator dropping one
+// (the real Aravis driver and vgrd's CameraWorker) against the emulator dropping one
 // GVSP packet in 10,000. The emulator cannot resend, so a lost packet is a lost frame.
 // Every trigger ends in a frame or a typed error; with one re-trigger allowed within the
 // deadline, at least 99.5 % of triggers get their frame. The emulator serves a pre-rendered
@@ -17,14 +17,14 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "config/cell_config.hpp"
-#include "daemon/process.hpp"
+#include "core/child_process.hpp"
 #include "sim/scene.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 using std::chrono::milliseconds;
-using vgr::daemon::ChildProcess;
+using vgr::ChildProcess;
 
 class CameraLoss : public ::testing::Test {
  protected:

@@ -13,14 +13,14 @@
 #include <opencv2/core.hpp>
 
 #include "config/cell_config.hpp"
-#include "daemon/process.hpp"
+#include "core/child_process.hpp"
 #include "drivers/camera.hpp"
 #include "sim/scene.hpp"
 
 namespace {
 
 using std::chrono::milliseconds;
-using vgr::daemon::ChildProcess;
+using vgr::ChildProcess;
 
 std::string run(const std::string& cmd) {
   std::string out;

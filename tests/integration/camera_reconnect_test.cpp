@@ -15,14 +15,14 @@
 #include <gtest/gtest.h>
 
 #include "config/cell_config.hpp"
-#include "daemon/process.hpp"
+#include "core/child_process.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 using std::chrono::milliseconds;
-using vgr::daemon::ChildProcess;
+using vgr::ChildProcess;
 
 struct PlcCycle {
   bool answered = false;

@@ -112,7 +112,7 @@ TEST_F(locate_vgrd_job, BrokenJobYamlFailsTheCheckNamingFileLineAndKey) {
   dir_ = jobDir_;
   const std::string cfgPath = (jobDir_ / "cell.yaml").string();
   std::ofstream(cfgPath) << withFolderJob(vgr::config::embeddedSimCellYaml(), folder, 0);
-  auto p = vgr::daemon::ChildProcess::spawn({bin("vgrd"), "--config", cfgPath, "--check"}, (jobDir_ / "check.log").string());
+  auto p = vgr::ChildProcess::spawn({bin("vgrd"), "--config", cfgPath, "--check"}, (jobDir_ / "check.log").string());
   ASSERT_TRUE(p.has_value());
   const int rc = p->wait(std::chrono::milliseconds(10000));
   const std::string out = log("check.log");
@@ -129,7 +129,7 @@ TEST_F(locate_vgrd_job, AMethodThatCannotBeBuiltStopsTheStartNamingTheJob) {
   std::string yaml = withFolderJob(vgr::config::embeddedSimCellYaml(), folder, 0);
   yaml.replace(yaml.find("journal: /tmp/vgr/journal.jsonl"), 31, "journal: " + (jobDir_ / "j.jsonl").string());
   std::ofstream(cfgPath) << yaml;
-  auto p = vgr::daemon::ChildProcess::spawn({bin("vgrd"), "--config", cfgPath}, (jobDir_ / "start.log").string());
+  auto p = vgr::ChildProcess::spawn({bin("vgrd"), "--config", cfgPath}, (jobDir_ / "start.log").string());
   ASSERT_TRUE(p.has_value());
   const int rc = p->wait(std::chrono::milliseconds(10000));
   const std::string out = log("start.log");

@@ -50,7 +50,7 @@ class locate_vgrd_methods : public ModbusCell, public ::testing::WithParamInterf
     const std::string image = (jobRoot_ / "template.png").string();
     EXPECT_TRUE(cv::imwrite(image, templ));
     const std::string folder = (jobRoot_ / "job").string();
-    auto p = vgr::daemon::ChildProcess::spawn({bin("vgr"), "teach", "--image", image, "--grasp",
+    auto p = vgr::ChildProcess::spawn({bin("vgr"), "teach", "--image", image, "--grasp",
                                                std::to_string(t.graspU) + "," + std::to_string(t.graspV), "--method",
                                                method, "--out", folder},
                                               (jobRoot_ / "teach.log").string());

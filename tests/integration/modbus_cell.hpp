@@ -24,7 +24,7 @@
 #include <nlohmann/json.hpp>
 
 #include "config/cell_config.hpp"
-#include "daemon/process.hpp"
+#include "core/child_process.hpp"
 
 namespace vgr::test {
 
@@ -76,10 +76,10 @@ class ModbusCell : public ::testing::Test {
   }
 
   void startCamera() {
-    auto p = daemon::ChildProcess::spawn({bin("vgr-sim-camera"), "--config", configPath_}, (dir_ / "camera.log").string());
+    auto p = ChildProcess::spawn({bin("vgr-sim-camera"), "--config", configPath_}, (dir_ / "camera.log").string());
     ASSERT_TRUE(p.has_value());
     ASSERT_TRUE(p->waitForLine("\"ready\"", std::chrono::milliseconds(5000)));
-    camera_ = std::make_unique<daemon::ChildProcess>(std::move(*p));
+    camera_ = std::make_unique<ChildProcess>(std::move(*p));
   }
 
   void startVgrd() {
@@ -90,11 +90,11 @@ class ModbusCell : public ::testing::Test {
     std::snprintf(sa.sun_path, sizeof sa.sun_path, "%s", sock.c_str());
     ASSERT_EQ(::bind(notifyFd_, reinterpret_cast<sockaddr*>(&sa), sizeof sa), 0);
     ::setenv("NOTIFY_SOCKET", sock.c_str(), 1);
-    auto p = daemon::ChildProcess::spawn({bin("vgrd"), "--config", configPath_, "--journal", journalPath()},
+    auto p = ChildProcess::spawn({bin("vgrd"), "--config", configPath_, "--journal", journalPath()},
                                          (dir_ / "vgrd.log").string());
     ::unsetenv("NOTIFY_SOCKET");
     ASSERT_TRUE(p.has_value());
-    vgrd_ = std::make_unique<daemon::ChildProcess>(std::move(*p));
+    vgrd_ = std::make_unique<ChildProcess>(std::move(*p));
     ASSERT_TRUE(waitNotify("READY=1", std::chrono::milliseconds(15000))) << log("vgrd.log");
   }
 
@@ -157,7 +157,7 @@ class ModbusCell : public ::testing::Test {
   std::filesystem::path dir_;
   std::string configPath_;
   config::CellConfig cfg_;
-  std::unique_ptr<daemon::ChildProcess> camera_, vgrd_;
+  std::unique_ptr<ChildProcess> camera_, vgrd_;
   int notifyFd_ = -1;
 };
 

@@ -75,7 +75,7 @@ class modbus_client_mode : public ModbusCell {
 TEST_F(modbus_client_mode, SimPlcServerPulsesTheSensorAndReceivesEveryResult) {
   ASSERT_NE(kPlcPort, 0);
   ASSERT_NO_FATAL_FAILURE(startCell(enableClient));
-  auto plc = vgr::daemon::ChildProcess::spawn({bin("vgr-sim-plc"), "--serve", "--port", std::to_string(kPlcPort),
+  auto plc = vgr::ChildProcess::spawn({bin("vgr-sim-plc"), "--serve", "--port", std::to_string(kPlcPort),
                                                 "--cycles", "6", "--interval-ms", "50", "--json"},
                                                (dir_ / "plc.log").string());
   ASSERT_TRUE(plc.has_value());
@@ -93,7 +93,7 @@ TEST_F(modbus_client_mode, SimPlcServerPulsesTheSensorAndReceivesEveryResult) {
 TEST_F(modbus_client_mode, AGlitchShorterThanTheDebounceTriggersNothing) {
   ASSERT_NE(kPlcPort, 0);
   ASSERT_NO_FATAL_FAILURE(startCell(enableClient));  // debounce_ms: 20
-  auto plc = vgr::daemon::ChildProcess::spawn({bin("vgr-sim-plc"), "--serve", "--port", std::to_string(kPlcPort),
+  auto plc = vgr::ChildProcess::spawn({bin("vgr-sim-plc"), "--serve", "--port", std::to_string(kPlcPort),
                                                 "--cycles", "1", "--pulse-ms", "4", "--timeout-ms", "1500", "--json"},
                                                (dir_ / "plc.log").string());
   ASSERT_TRUE(plc.has_value());
@@ -164,7 +164,7 @@ async def main():
 
 asyncio.run(main())
 )PY";
-  auto plc = vgr::daemon::ChildProcess::spawn({"/usr/bin/python3", script.string(), std::to_string(kPlcPort)}, plcLog.string());
+  auto plc = vgr::ChildProcess::spawn({"/usr/bin/python3", script.string(), std::to_string(kPlcPort)}, plcLog.string());
   ASSERT_TRUE(plc.has_value());
   ASSERT_TRUE(plc->waitForLine("listening", 10s));
   ASSERT_NO_FATAL_FAILURE(startCell(enableClient));

@@ -22,14 +22,14 @@
 #include <nlohmann/json.hpp>
 
 #include "config/cell_config.hpp"
-#include "daemon/process.hpp"
+#include "core/child_process.hpp"
 #include "sim/scene.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 using std::chrono::milliseconds;
-using vgr::daemon::ChildProcess;
+using vgr::ChildProcess;
 using Clock = std::chrono::steady_clock;
 
 constexpr int kModbusPort = 1502, kUrPort = 50010, kAbbPort = 50011, kFanucPort = 50012;
