@@ -1,9 +1,11 @@
-// `vgr grab` and `vgr cameras` (docs/cameras.md): the camera side of a cell, tried alone.
+// `vgr grab` (docs/cameras.md): the camera side of a cell, tried alone.
 #pragma once
 
 #include <string>
 
-namespace vgr::daemon {
+#include "tools/vgr/subcommand.hpp"
+
+namespace vgr::tools {
 
 struct GrabOptions {
   std::string camera;       // IPv4 address, serial number or DeviceUserID
@@ -26,7 +28,13 @@ struct GrabOptions {
 // the camera cannot be opened (the message names the camera and the setting), 2 on bad input.
 int runGrab(const GrabOptions& options);
 
-// Lists the cameras discovery finds (serial, model, address). Exit code 0.
-int runCameras(bool json);
+class GrabCommand final : public Subcommand {
+ public:
+  CLI::App* add(CLI::App& parent) override;
+  int run() override { return runGrab(options_); }
 
-}  // namespace vgr::daemon
+ private:
+  GrabOptions options_;
+};
+
+}  // namespace vgr::tools

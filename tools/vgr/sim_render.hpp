@@ -1,0 +1,22 @@
+// `vgr sim render`: a localization dataset with ground truth from the part renderer
+// (docs/datasets.md). Prints one JSON line {"out","images","empty_images","parts"};
+// exit code 0, or 2 with the message on stderr.
+#pragma once
+
+#include "sim/dataset.hpp"
+#include "tools/vgr/subcommand.hpp"
+
+namespace vgr::tools {
+
+int runSimRender(const sim::DatasetOptions& o);
+
+class SimRenderCommand final : public Subcommand {
+ public:
+  CLI::App* add(CLI::App& parent) override;
+  int run() override { return runSimRender(options_); }
+
+ private:
+  sim::DatasetOptions options_;
+};
+
+}  // namespace vgr::tools
