@@ -21,13 +21,9 @@ struct CalibHandEyeOptions {
 };
 int runCalibrateHandEye(const CalibHandEyeOptions& o);
 
-class CalibrateHandEyeCommand final : public Subcommand {
+class CalibrateHandEyeCommand final : public OptionsSubcommand<CalibHandEyeOptions, runCalibrateHandEye> {
  public:
   CLI::App* add(CLI::App& parent) override;
-  int run() override { return runCalibrateHandEye(options_); }
-
- private:
-  CalibHandEyeOptions options_;
 };
 
 }  // namespace vgr::tools

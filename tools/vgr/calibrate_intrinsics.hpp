@@ -19,13 +19,9 @@ struct CalibIntrinsicsOptions {
 };
 int runCalibrateIntrinsics(const CalibIntrinsicsOptions& o);
 
-class CalibrateIntrinsicsCommand final : public Subcommand {
+class CalibrateIntrinsicsCommand final : public OptionsSubcommand<CalibIntrinsicsOptions, runCalibrateIntrinsics> {
  public:
   CLI::App* add(CLI::App& parent) override;
-  int run() override { return runCalibrateIntrinsics(options_); }
-
- private:
-  CalibIntrinsicsOptions options_;
 };
 
 }  // namespace vgr::tools

@@ -21,13 +21,9 @@ struct CalibPlaneOptions {
 };
 int runCalibratePlane(const CalibPlaneOptions& o);
 
-class CalibratePlaneCommand final : public Subcommand {
+class CalibratePlaneCommand final : public OptionsSubcommand<CalibPlaneOptions, runCalibratePlane> {
  public:
   CLI::App* add(CLI::App& parent) override;
-  int run() override { return runCalibratePlane(options_); }
-
- private:
-  CalibPlaneOptions options_;
 };
 
 }  // namespace vgr::tools

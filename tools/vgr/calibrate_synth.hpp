@@ -26,13 +26,9 @@ struct CalibSynthOptions {
 };
 int runCalibrateSynth(const CalibSynthOptions& o);
 
-class CalibrateSynthCommand final : public Subcommand {
+class CalibrateSynthCommand final : public OptionsSubcommand<CalibSynthOptions, runCalibrateSynth> {
  public:
   CLI::App* add(CLI::App& parent) override;
-  int run() override { return runCalibrateSynth(options_); }
-
- private:
-  CalibSynthOptions options_;
 };
 
 }  // namespace vgr::tools

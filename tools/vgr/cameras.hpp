@@ -12,13 +12,9 @@ struct CamerasOptions {
 // Lists the cameras discovery finds (serial, model, address). Exit code 0.
 int runCameras(const CamerasOptions& options);
 
-class CamerasCommand final : public Subcommand {
+class CamerasCommand final : public OptionsSubcommand<CamerasOptions, runCameras> {
  public:
   CLI::App* add(CLI::App& parent) override;
-  int run() override { return runCameras(options_); }
-
- private:
-  CamerasOptions options_;
 };
 
 }  // namespace vgr::tools

@@ -15,13 +15,9 @@ struct CheckOptions {
 
 int runCheck(const CheckOptions& options);
 
-class CheckCommand final : public Subcommand {
+class CheckCommand final : public OptionsSubcommand<CheckOptions, runCheck> {
  public:
   CLI::App* add(CLI::App& parent) override;
-  int run() override { return runCheck(options_); }
-
- private:
-  CheckOptions options_;
 };
 
 }  // namespace vgr::tools

@@ -29,13 +29,9 @@ struct DemoOptions {
 // was well-formed, 1 otherwise, 2 when the cell could not be started.
 int runDemo(const DemoOptions& options);
 
-class DemoCommand final : public Subcommand {
+class DemoCommand final : public OptionsSubcommand<DemoOptions, runDemo> {
  public:
   CLI::App* add(CLI::App& parent) override;
-  int run() override { return runDemo(options_); }
-
- private:
-  DemoOptions options_;
 };
 
 }  // namespace vgr::tools

@@ -15,13 +15,9 @@ struct EvalCliOptions {
 
 int runEval(const EvalCliOptions& options);
 
-class EvalCommand final : public Subcommand {
+class EvalCommand final : public OptionsSubcommand<EvalCliOptions, runEval> {
  public:
   CLI::App* add(CLI::App& parent) override;
-  int run() override { return runEval(options_); }
-
- private:
-  EvalCliOptions options_;
 };
 
 }  // namespace vgr::tools

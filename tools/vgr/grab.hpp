@@ -28,13 +28,9 @@ struct GrabOptions {
 // the camera cannot be opened (the message names the camera and the setting), 2 on bad input.
 int runGrab(const GrabOptions& options);
 
-class GrabCommand final : public Subcommand {
+class GrabCommand final : public OptionsSubcommand<GrabOptions, runGrab> {
  public:
   CLI::App* add(CLI::App& parent) override;
-  int run() override { return runGrab(options_); }
-
- private:
-  GrabOptions options_;
 };
 
 }  // namespace vgr::tools

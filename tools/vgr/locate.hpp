@@ -17,13 +17,9 @@ struct LocateOptions {
 
 int runLocate(const LocateOptions& o);
 
-class LocateCommand final : public Subcommand {
+class LocateCommand final : public OptionsSubcommand<LocateOptions, runLocate> {
  public:
   CLI::App* add(CLI::App& parent) override;
-  int run() override { return runLocate(options_); }
-
- private:
-  LocateOptions options_;
 };
 
 }  // namespace vgr::tools

@@ -10,13 +10,9 @@ namespace vgr::tools {
 
 int runSimRender(const sim::DatasetOptions& o);
 
-class SimRenderCommand final : public Subcommand {
+class SimRenderCommand final : public OptionsSubcommand<sim::DatasetOptions, runSimRender> {
  public:
   CLI::App* add(CLI::App& parent) override;
-  int run() override { return runSimRender(options_); }
-
- private:
-  sim::DatasetOptions options_;
 };
 
 }  // namespace vgr::tools

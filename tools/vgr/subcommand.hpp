@@ -3,8 +3,9 @@
 // lists every subcommand in one table (STYLE.md rule 3), calls add() on each, parses the
 // command line, then run() on the one selected. One thread.
 //
-// Each subcommand's header also declares its options struct and a free
-// `int run<Name>(const <Name>Options&)`, so tests can run it in-process.
+// Each subcommand's header declares its options struct, a free
+// `int run<Name>(const <Name>Options&)` (tests run it in-process) and
+// `class <Name>Command final : public OptionsSubcommand<<Name>Options, run<Name>>`.
 #pragma once
 
 #include <string>
@@ -24,6 +25,17 @@ class Subcommand {
   virtual CLI::App* add(CLI::App& parent) = 0;
   // After a parse that selected this subcommand: the process exit code.
   virtual int run() = 0;
+};
+
+// The usual subcommand: options in a struct, run by a free function that tests can call
+// in-process. Subclasses write add() only.
+template <class Options, int (*Run)(const Options&)>
+class OptionsSubcommand : public Subcommand {
+ public:
+  int run() override { return Run(options_); }
+
+ protected:
+  Options options_;
 };
 
 // `message` and a newline on stderr; returns 2, the exit code for bad input.

@@ -20,13 +20,9 @@ struct TeachOptions {
 
 int runTeach(const TeachOptions& o);
 
-class TeachCommand final : public Subcommand {
+class TeachCommand final : public OptionsSubcommand<TeachOptions, runTeach> {
  public:
   CLI::App* add(CLI::App& parent) override;
-  int run() override { return runTeach(options_); }
-
- private:
-  TeachOptions options_;
 };
 
 }  // namespace vgr::tools
