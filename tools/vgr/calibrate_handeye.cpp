@@ -131,7 +131,7 @@ int runCalibrateHandEye(const CalibHandEyeOptions& o) {
 }
 
 CLI::App* CalibrateHandEyeCommand::add(CLI::App& parent) {
-  CalibHandEyeOptions& calHe = options_;
+  auto& calHe = options_;
   auto* calHeCmd = parent.add_subcommand("handeye", "hand-eye from a folder of plate images + poses.txt");
   calHeCmd->add_option("--folder", calHe.folder, "folder with poses.txt and the images it names")->required();
   calHeCmd->add_option("--intrinsics", calHe.intrinsics, "intrinsics.yaml from 'vgr calibrate intrinsics'")->required();

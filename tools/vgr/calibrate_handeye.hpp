@@ -19,6 +19,7 @@ struct CalibHandEyeOptions {
   std::string truth;           // optional: a truth.yaml from `vgr calibrate synth` -> errors per method
   bool json = false;
 };
+
 int runCalibrateHandEye(const CalibHandEyeOptions& o);
 
 class CalibrateHandEyeCommand final : public OptionsSubcommand<CalibHandEyeOptions, runCalibrateHandEye> {

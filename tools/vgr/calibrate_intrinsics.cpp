@@ -114,7 +114,7 @@ int runCalibrateIntrinsics(const CalibIntrinsicsOptions& o) {
 }
 
 CLI::App* CalibrateIntrinsicsCommand::add(CLI::App& parent) {
-  CalibIntrinsicsOptions& calIntr = options_;
+  auto& calIntr = options_;
   auto* calIntrCmd = parent.add_subcommand("intrinsics", "camera matrix and distortion from plate images");
   calIntrCmd->add_option("--images", calIntr.images, "glob of the plate images, e.g. 'calib/*.png'")->required();
   addPatternOptions(*calIntrCmd, calIntr.pattern);

@@ -17,6 +17,7 @@ struct CalibIntrinsicsOptions {
   bool noTangential = false;  // hold p1 = p2 = 0 (CALIB_ZERO_TANGENT_DIST)
   bool json = false;
 };
+
 int runCalibrateIntrinsics(const CalibIntrinsicsOptions& o);
 
 class CalibrateIntrinsicsCommand final : public OptionsSubcommand<CalibIntrinsicsOptions, runCalibrateIntrinsics> {

@@ -93,7 +93,7 @@ int runCalibratePlane(const CalibPlaneOptions& o) {
 }
 
 CLI::App* CalibratePlaneCommand::add(CLI::App& parent) {
-  CalibPlaneOptions& calPl = options_;
+  auto& calPl = options_;
   auto* calPlCmd = parent.add_subcommand("plane", "work plane from a plate on the conveyor or robot-touched points");
   calPlCmd->add_option("--image", calPl.image, "image of a plate lying on the conveyor");
   calPlCmd->add_option("--intrinsics", calPl.intrinsics, "intrinsics.yaml (with --image)");

@@ -19,6 +19,7 @@ struct CalibPlaneOptions {
   std::string out = "plane.yaml";
   bool json = false;
 };
+
 int runCalibratePlane(const CalibPlaneOptions& o);
 
 class CalibratePlaneCommand final : public OptionsSubcommand<CalibPlaneOptions, runCalibratePlane> {

@@ -157,7 +157,7 @@ int runCalibrateSynth(const CalibSynthOptions& o) {
 }
 
 CLI::App* CalibrateSynthCommand::add(CLI::App& parent) {
-  CalibSynthOptions& calSyn = options_;
+  auto& calSyn = options_;
   auto* calSynCmd = parent.add_subcommand("synth", "render a synthetic calibration set with ground truth");
   calSynCmd->add_option("--kind", calSyn.kind, "intrinsics, handeye or cell (all three sets for a cell's camera)");
   calSynCmd->add_option("--cell", calSyn.cellConfig, "cell config for --kind cell (default: the embedded sim cell)");

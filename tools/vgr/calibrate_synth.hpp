@@ -24,6 +24,7 @@ struct CalibSynthOptions {
   double maxTiltDeg = 40, distanceMm = 420;
   double partialShare = 0;             // share of views with the plate partly outside the image (charuco)
 };
+
 int runCalibrateSynth(const CalibSynthOptions& o);
 
 class CalibrateSynthCommand final : public OptionsSubcommand<CalibSynthOptions, runCalibrateSynth> {

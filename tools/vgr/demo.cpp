@@ -383,7 +383,7 @@ int runDemo(const DemoOptions& o) {
 }
 
 CLI::App* DemoCommand::add(CLI::App& parent) {
-  DemoOptions& demo = options_;
+  auto& demo = options_;
   auto* demoCmd = parent.add_subcommand("demo", "run the simulated cell (camera emulator, vgrd, PLC and robot simulators) for N cycles");
   demoCmd->add_option("--cycles", demo.cycles, "number of PLC-triggered cycles")->check(CLI::Range(1, 1000000));
   demoCmd->add_option("--config", demo.configPath, "cell config (default: the embedded config/examples/sim-cell.yaml)");

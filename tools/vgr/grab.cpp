@@ -174,7 +174,7 @@ int runGrab(const GrabOptions& o) {
 }
 
 CLI::App* GrabCommand::add(CLI::App& parent) {
-  GrabOptions& grab = options_;
+  auto& grab = options_;
   auto* grabCmd = parent.add_subcommand("grab", "trigger N frames; report frames, typed errors and trigger->frame latency");
   grabCmd->add_option("--camera", grab.camera, "IPv4 address, serial number or DeviceUserID");
   grabCmd->add_option("--config", grab.configPath, "cell config whose camera section gives the features");
