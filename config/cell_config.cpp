@@ -266,11 +266,7 @@ void parseRobot(Section s, RobotConfig& r) {
   std::string dialect = "ur";
   s.read<std::string>("dialect", dialect, oneOf({"ur", "abb", "fanuc", "binary", "strict"}),
                       "one of: ur, abb, fanuc, binary, strict");
-  r.dialect = dialect == "ur"      ? Dialect::Ur
-              : dialect == "abb"   ? Dialect::Abb
-              : dialect == "fanuc" ? Dialect::Fanuc
-              : dialect == "binary" ? Dialect::Binary
-                                    : Dialect::Strict;
+  r.dialect = *protocol::parseDialect(dialect);  // oneOf() accepted exactly the names parseDialect knows
   s.read<std::string>("bind", r.bind);
   int port = 0;
   s.read<int>("port", port, inRange(1, 65535), "[1, 65535]");
@@ -355,11 +351,21 @@ void parseCalibration(Section s, CalibrationFilesConfig& c, const YAML::Node& no
   if (!node || node.IsNull()) return;
   c.enabled = true;
   const std::string dir = std::filesystem::path(file).parent_path().string();
-  for (auto [key, out] : {std::pair{"intrinsics", &c.intrinsics}, std::pair{"handeye", &c.handeye}, std::pair{"plane", &c.plane}}) {
-    s.require(key);
-    s.read<std::string>(key, *out);
-    if (out->empty()) s.fail(s.get(key), key, "expected a file path");
-    if (std::filesystem::path(*out).is_relative() && !dir.empty()) *out = (std::filesystem::path(dir) / *out).string();
+  auto readPath = [&](const char* key, std::string& out) {
+    s.read<std::string>(key, out);
+    if (out.empty()) s.fail(s.get(key), key, "expected a file path");
+    if (std::filesystem::path(out).is_relative() && !dir.empty()) out = (std::filesystem::path(dir) / out).string();
+  };
+  if (node.IsMap() && node["multiheight"]) {
+    // Paper 001's multi-height map alone: it needs no camera model.
+    for (const char* key : {"intrinsics", "handeye", "plane"})
+      if (node[key]) s.fail(node[key], key, "give either 'multiheight' or 'intrinsics' + 'handeye' + 'plane', not both");
+    readPath("multiheight", c.multiHeight);
+  } else {
+    for (auto [key, out] : {std::pair{"intrinsics", &c.intrinsics}, std::pair{"handeye", &c.handeye}, std::pair{"plane", &c.plane}}) {
+      s.require(key);
+      readPath(key, *out);
+    }
   }
   s.finish();
 }
@@ -449,17 +455,6 @@ const char* triggerModeName(TriggerMode m) {
     case TriggerMode::FreeRun: return "free_run";
   }
   return "software";
-}
-
-const char* dialectName(Dialect dialect) {
-  switch (dialect) {
-    case Dialect::Ur: return "ur";
-    case Dialect::Abb: return "abb";
-    case Dialect::Fanuc: return "fanuc";
-    case Dialect::Binary: return "binary";
-    case Dialect::Strict: return "strict";
-  }
-  return "?";
 }
 
 const JobConfig* CellConfig::findJob(int id) const {

@@ -9,13 +9,14 @@
 #include <vector>
 
 #include "core/result.hpp"
+#include "protocol/wire_types.hpp"
 
 namespace vgr::config {
 
-enum class WordOrder { HighWordFirst, LowWordFirst };
-enum class Dialect { Ur, Abb, Fanuc, Binary, Strict };
-// The cell.yaml spelling: "ur", "abb", "fanuc", "binary", "strict".
-const char* dialectName(Dialect dialect);
+// The protocol layer owns the wire choices (protocol/wire_types.hpp); the config names them.
+using protocol::Dialect;
+using protocol::WordOrder;
+using protocol::dialectName;  // the cell.yaml spelling: "ur", "abb", "fanuc", "binary", "strict"
 
 // Which part of a multi-part image a robot gets next (paper 002's sorting strategies).
 enum class PartOrder {
@@ -163,13 +164,15 @@ struct SimConfig {
 };
 
 // Calibration files (docs/calibration.md) vgrd maps pixels with instead of `model`. Paths
-// relative to the config file's folder; all three set, or the section absent. A job whose
-// calibration is missing or inconsistent gets -6 NOT_CALIBRATED.
+// relative to the config file's folder. Either the camera-plane set (intrinsics + handeye +
+// plane, all three) or paper 001's multi-height map (multiheight alone), or the section
+// absent. A job whose calibration is missing or inconsistent gets -6 NOT_CALIBRATED.
 struct CalibrationFilesConfig {
   bool enabled = false;    // true when the section is present
   std::string intrinsics;  // intrinsics.yaml (vgr calibrate intrinsics)
   std::string handeye;     // handeye.yaml, eye-to-hand (vgr calibrate handeye)
   std::string plane;       // plane.yaml (vgr calibrate plane)
+  std::string multiHeight; // multiheight.yaml (paper 001, section 4.1); excludes the three above
 };
 
 struct CellConfig {

@@ -14,6 +14,11 @@ namespace vgr {
 // Cycle ids stay below 2^23 (RAPID's num is a float): they wrap to 1 after kMaxCycleId.
 inline constexpr std::uint32_t kMaxCycleId = (1u << 23) - 1;
 
+// What started a cycle: the PLC over Modbus (server or client mode), a robot's request, or
+// the operator (vgrd's SIGUSR1). Recorded in the journal as "modbus", "robot", "operator".
+enum class TriggerSource { Modbus, Robot, Operator };
+const char* triggerSourceName(TriggerSource source);
+
 struct PartResult {
   Pose pose;          // part (grasp point) in the robot base frame, mm
   Pose offset;        // T_ref^-1 * T_part: the offset from the job's taught reference
@@ -28,6 +33,7 @@ struct CycleResult {
   std::uint32_t cycleId = 0;
   Status status = Status::Internal;
   int jobId = 0;
+  TriggerSource trigger = TriggerSource::Modbus;
   std::uint64_t frameId = 0;   // camera frame (GVSP block) id, 0 when no frame
   std::vector<PartResult> parts;  // best first
   double grabMs = 0, locateMs = 0, totalMs = 0;

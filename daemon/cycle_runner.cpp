@@ -1,14 +1,15 @@
 #include "daemon/cycle_runner.hpp"
 
 #include <cmath>
+#include <numbers>
 
 #include <fmt/core.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "config/job.hpp"
-
 #include "core/log.hpp"
+#include "daemon/cell_mapping.hpp"
 #include "vision/locate/moments_locator.hpp"
 
 namespace vgr::daemon {
@@ -18,70 +19,87 @@ using std::chrono::milliseconds;
 
 namespace {
 
-constexpr double kDegToRad = M_PI / 180.0;
+constexpr double kDegToRad = std::numbers::pi / 180.0;
 // Time kept back from the cycle deadline for localization and publishing (ms).
 constexpr int kProcessingReserveMs = 150;
 
 double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
 
-vision::PinholePlaneModel modelFrom(const config::PlaneModelConfig& m) {
-  return vision::PinholePlaneModel(m.fx, m.fy, m.cx, m.cy,
-                                   vision::PinholePlaneModel::downLookingCamera(m.camX, m.camY, m.camZ, m.camRzDeg),
-                                   m.planeZ);
+// The size the locators are warmed up at (their first locate() sizes their buffers): the
+// camera's ROI when configured, else the size the calibration was made for, else the
+// pinhole model's nominal image (twice the principal point). A camera that delivers another
+// size costs one slower first cycle, never a wrong answer.
+struct WarmSize {
+  int width, height;
+  const char* source;
+};
+WarmSize warmUpSize(const config::CellConfig& cell, const vision::calib::PixelMapping* mapping) {
+  if (cell.camera.roiWidth > 0 && cell.camera.roiHeight > 0) return {cell.camera.roiWidth, cell.camera.roiHeight, "camera ROI"};
+  if (mapping)
+    if (const auto size = mapping->imageSize()) return {size->width, size->height, "calibration"};
+  return {static_cast<int>(std::lround(2 * (cell.model.cx + 0.5))), static_cast<int>(std::lround(2 * (cell.model.cy + 0.5))),
+          "model principal point"};
 }
 
 }  // namespace
 
-const char* triggerSourceName(TriggerSource s) {
-  switch (s) {
-    case TriggerSource::Modbus: return "modbus";
-    case TriggerSource::Robot: return "robot";
-    case TriggerSource::Operator: return "operator";
-  }
-  return "unknown";
-}
-
 CycleRunner::CycleRunner(const config::CellConfig& cell, drivers::CameraWorker& camera, CycleSinks sinks)
-    : cell_(cell), camera_(camera), sinks_(std::move(sinks)), model_(modelFrom(cell.model)) {
-  if (cell.calibration.enabled) {
-    auto m = vision::calib::loadCellCalibration(cell.calibration.intrinsics, cell.calibration.handeye,
-                                                cell.calibration.plane);
-    if (m) {
-      calibrated_ = *m;
-      log::info("cycle", "mapping with calibration files {}, {}, {}", cell.calibration.intrinsics,
-                cell.calibration.handeye, cell.calibration.plane);
-    } else {
-      calibrationError_ = m.error().message;
-      log::error("cycle", "NOT_CALIBRATED: {}", calibrationError_);
-    }
+    : cell_(cell), camera_(camera), sinks_(std::move(sinks)) {
+  auto m = makeCellMapping(cell);
+  if (m) {
+    mapping_ = std::move(*m);
+    log::info("cycle", "mapping with {}", mapping_->describe());
+    if (cell.calibration.enabled && cell.calibration.multiHeight.empty())
+      log::info("cycle", "mapping with calibration files {}, {}, {}", cell.calibration.intrinsics, cell.calibration.handeye,
+                cell.calibration.plane);
+  } else {
+    calibrationError_ = m.error().message;
+    log::error("cycle", "NOT_CALIBRATED: {}", calibrationError_);
   }
 }
 
 CycleRunner::~CycleRunner() { stop(); }
 
 Result<void> CycleRunner::prepareJobs() {
+  const WarmSize warmSize = warmUpSize(cell_, mapping_.get());
   for (const auto& job : cell_.jobs) {
-    if (job.folder.empty()) continue;
-    auto jf = config::loadJob(job.folder);
-    if (!jf) return std::unexpected(jf.error());
-    const cv::Mat templ = cv::imread(jf->templatePath(), cv::IMREAD_GRAYSCALE);
-    if (templ.empty()) return fail(Status::BadArgument, jf->templatePath() + ": cannot read the template image");
-    auto loc = vision::makeLocator(job.method, templ, jf->taught);
-    if (!loc) return fail(loc.error().code, fmt::format("job {} ({}): {}", job.id, job.folder, loc.error().message));
+    PreparedJob prepared;
+    prepared.rules.heightMm = job.partHeightMm;
+    prepared.rules.angleOffsetDeg = job.angleOffsetDeg;
+    prepared.rules.reference =
+        poseFromXyzRz(job.reference.x, job.reference.y, job.reference.z, job.reference.rzDeg * kDegToRad);
+    if (job.folder.empty()) {
+      // Untaught: the blob-moments method with the job's keys in the cell config.
+      vision::MomentsParams params;
+      params.threshold = job.threshold;
+      params.minAreaPx = job.minAreaPx;
+      params.maxAreaPx = job.maxAreaPx;
+      prepared.locator = vision::makeUntaughtMomentsLocator(params);
+    } else {
+      auto jf = config::loadJob(job.folder);
+      if (!jf) return std::unexpected(jf.error());
+      const cv::Mat templ = cv::imread(jf->templatePath(), cv::IMREAD_GRAYSCALE);
+      if (templ.empty()) return fail(Status::BadArgument, jf->templatePath() + ": cannot read the template image");
+      auto loc = vision::makeLocator(job.method, templ, jf->taught);
+      if (!loc) return fail(loc.error().code, fmt::format("job {} ({}): {}", job.id, job.folder, loc.error().message));
+      prepared.locator = std::move(*loc);
+    }
     // The first locate() sizes the method's buffers (the shape matcher: ~1 s at 2448x2048):
-    // pay it now, not in the first cycle's deadline. Size: the camera ROI when configured,
-    // else the simulated sensor (a real sensor's full size is known only once it streams).
-    const int w = cell_.camera.roiWidth > 0 ? cell_.camera.roiWidth : cell_.sim.width;
-    const int h = cell_.camera.roiHeight > 0 ? cell_.camera.roiHeight : cell_.sim.height;
+    // pay it now, not in the first cycle's deadline.
     const auto warmStart = Clock::now();
-    const auto warm = (*loc)->locate(cv::Mat(h, w, CV_8UC1, cv::Scalar(0)));
-    log::info("cycle", "job {}: method {} from {} (warm-up at {}x{}: {:.0f} ms{})", job.id, job.method, job.folder, w, h,
-              msSince(warmStart), warm ? "" : ", " + warm.error().message);
-    locators_[job.id] = std::move(*loc);
+    const auto warm = prepared.locator->locate(cv::Mat(warmSize.height, warmSize.width, CV_8UC1, cv::Scalar(0)));
+    if (job.folder.empty())
+      log::info("cycle", "job {}: untaught moments (threshold {}, area {}..{} px²; warm-up at {}x{} from the {}: {:.0f} ms{})",
+                job.id, job.threshold, job.minAreaPx, job.maxAreaPx, warmSize.width, warmSize.height, warmSize.source,
+                msSince(warmStart), warm ? "" : ", " + warm.error().message);
+    else
+      log::info("cycle", "job {}: method {} from {} (warm-up at {}x{} from the {}: {:.0f} ms{})", job.id, job.method,
+                job.folder, warmSize.width, warmSize.height, warmSize.source, msSince(warmStart),
+                warm ? "" : ", " + warm.error().message);
+    jobs_[job.id] = std::move(prepared);
   }
   return {};
 }
-
 void CycleRunner::start() { thread_ = std::thread([this] { run(); }); }
 
 void CycleRunner::stop() {
@@ -142,35 +160,32 @@ CycleResult CycleRunner::runCycle(const Trigger& t) {
   CycleResult r;
   r.cycleId = t.cycleId;
   r.jobId = t.jobId;
+  r.trigger = t.source;
   r.triggerTime = t.wallAt;
   const auto deadline = t.at + milliseconds(cell_.cycleDeadlineMs);
-
-  const config::JobConfig* job = cell_.findJob(t.jobId);
-  if (!job) {
-    r.status = Status::JobNotFound;
+  auto end = [&](Status status, const std::string& why) {
+    r.status = status;
+    r.parts.clear();
     r.totalMs = msSince(t.at);
-    log::warn("cycle", "cycle {}: job {} is not configured", t.cycleId, t.jobId);
+    log::warn("cycle", "cycle {}: {}", t.cycleId, why);
     return r;
-  }
+  };
 
-  if (!calibrationError_.empty()) {
-    r.status = Status::NotCalibrated;
-    r.totalMs = msSince(t.at);
-    log::warn("cycle", "cycle {}: job {}: NOT_CALIBRATED: {}", t.cycleId, t.jobId, calibrationError_);
-    return r;
-  }
+  const auto job = jobs_.find(t.jobId);
+  if (job == jobs_.end()) return end(Status::JobNotFound, fmt::format("job {} is not configured", t.jobId));
+  if (!mapping_) return end(Status::NotCalibrated, fmt::format("job {}: NOT_CALIBRATED: {}", t.jobId, calibrationError_));
 
+  // 1. grab
   const auto grabStart = Clock::now();
   auto g = camera_.grab(frame_, deadline - milliseconds(kProcessingReserveMs));
   r.grabMs = msSince(grabStart);
-  if (!g) {
-    r.status = Status::CameraError;
-    r.totalMs = msSince(t.at);
-    log::warn("cycle", "cycle {}: {}", t.cycleId, g.error().message);
-    return r;
-  }
+  if (!g) return end(Status::CameraError, g.error().message);
   r.frameId = frame_.frameId;
+  if (const auto size = mapping_->imageSize(); size && (frame_.width != size->width || frame_.height != size->height))
+    return end(Status::NotCalibrated, fmt::format("NOT_CALIBRATED: the calibration is for {}x{} px, the camera delivers {}x{} px",
+                                                  size->width, size->height, frame_.width, frame_.height));
 
+  // 2. locate
   const auto locateStart = Clock::now();
   cv::Mat image(frame_.height, frame_.width, CV_8UC1, frame_.data.data());
   if (frame_.pixel == drivers::PixelType::Mono16) {
@@ -180,66 +195,17 @@ CycleResult CycleRunner::runCycle(const Trigger& t) {
     wide.convertTo(gray8, CV_8UC1, 1.0 / (1 << (frame_.bitDepth - 8)));
     image = gray8;
   }
-  Result<std::vector<vision::Detection>> found;
-  if (const auto it = locators_.find(job->id); it != locators_.end()) {
-    // A taught job (folder): its method, built at start (prepareJobs).
-    auto out = it->second->locate(image);
-    if (out) found = std::move(out->parts);
-    else found = std::unexpected(out.error());
-  } else {
-    vision::MomentsParams params;
-    params.threshold = job->threshold;
-    params.minAreaPx = job->minAreaPx;
-    params.maxAreaPx = job->maxAreaPx;
-    found = vision::locateByMoments(image, params);
-  }
+  auto found = job->second.locator->locate(image);
   r.locateMs = msSince(locateStart);
-  if (!found) {
-    r.status = found.error().code;
-    r.totalMs = msSince(t.at);
-    log::warn("cycle", "cycle {}: {}", t.cycleId, found.error().message);
-    return r;
-  }
+  if (!found) return end(found.error().code, found.error().message);
 
-  if (calibrated_ && (frame_.width != calibrated_->camera().imageSize.width ||
-                      frame_.height != calibrated_->camera().imageSize.height)) {
-    r.status = Status::NotCalibrated;
-    r.totalMs = msSince(t.at);
-    log::warn("cycle", "cycle {}: NOT_CALIBRATED: {} is for {}x{} px, the camera delivers {}x{} px", t.cycleId,
-              cell_.calibration.intrinsics, calibrated_->camera().imageSize.width,
-              calibrated_->camera().imageSize.height, frame_.width, frame_.height);
-    return r;
-  }
-  // Pixel -> base frame at the part height: the calibration files when configured, else
-  // the config's `model` (the simulated cell's known camera).
-  auto toPlane = [&](vision::PixelPoint px, double h) -> std::optional<Vec3> {
-    return calibrated_ ? calibrated_->pixelToRobot(px, h) : model_.pixelToPlane(px, h);
-  };
-  const Pose reference = poseFromXyzRz(job->reference.x, job->reference.y, job->reference.z, job->reference.rzDeg * kDegToRad);
-  for (const auto& d : *found) {
-    // Grasp point and a point 20 px along the part's axis, both onto the plane at the
-    // part's grasp height; the robot-frame angle is the direction between them.
-    const double a = d.angleDeg * kDegToRad;
-    const auto p = toPlane({d.u, d.v}, job->partHeightMm);
-    const auto q = toPlane({d.u + 20 * std::cos(a), d.v - 20 * std::sin(a)}, job->partHeightMm);
-    if (!p || !q) continue;
-    const double rz = std::atan2(q->y - p->y, q->x - p->x) + job->angleOffsetDeg * kDegToRad;
-    PartResult part;
-    part.pose = poseFromXyzRz(p->x, p->y, p->z, std::remainder(rz, 2 * M_PI));
-    part.offset = compose(inverse(reference), part.pose);
-    part.uPx = d.u;
-    part.vPx = d.v;
-    part.angleImgDeg = d.angleDeg;
-    part.score = d.score;
-    r.parts.push_back(part);
-  }
+  // 3. map
+  r.parts = vision::partPoses(found->parts, *mapping_, job->second.rules);
   r.status = r.parts.empty() ? Status::NoPartFound : Status::Ok;
   r.totalMs = msSince(t.at);
-  if (Clock::now() > deadline) {
-    log::warn("cycle", "cycle {}: finished after its {} ms deadline", t.cycleId, cell_.cycleDeadlineMs);
-    r.status = Status::ProcessingTimeout;
-    r.parts.clear();
-  }
+  if (Clock::now() > deadline)
+    return end(Status::ProcessingTimeout, fmt::format("finished after its {} ms deadline", cell_.cycleDeadlineMs));
+  // 4. deliver: the caller hands r to the sinks.
   return r;
 }
 

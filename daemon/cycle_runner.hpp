@@ -1,4 +1,11 @@
-// Cycle orchestration: trigger -> image -> localization -> pose in robot frame -> sinks.
+// Cycle orchestration. One cycle is four calls into four layers:
+//   grab    CameraWorker::grab()             drivers: the frame, within the deadline
+//   locate  vision::Locator::locate()        vision/locate: detections in pixels
+//   map     vision::partPoses()              vision/calib: poses in the robot base frame
+//   deliver CycleSinks::onResult()           daemon: PLC links, robots, journal
+// Every job is a Locator (a taught job's method from its folder; an untaught job the
+// blob-moments locator from its cell-config keys), built at start; the pixel -> robot
+// mapping is the one the cell config selects (daemon/cell_mapping.hpp).
 // Triggers come from any thread through submit() (non-blocking, bounded queue); cycles run
 // one at a time on the cycle thread; every accepted trigger produces exactly one
 // CycleResult, by its deadline (an error status when the camera or vision cannot finish).
@@ -20,14 +27,11 @@
 #include "config/cell_config.hpp"
 #include "core/cycle.hpp"
 #include "drivers/camera_worker.hpp"
-#include "vision/calib/mapping.hpp"
-#include "vision/calib/plane_model.hpp"
+#include "vision/calib/pixel_mapping.hpp"
 #include "vision/locate/locator.hpp"
+#include "vision/part_poses.hpp"
 
 namespace vgr::daemon {
-
-enum class TriggerSource { Modbus, Robot, Operator };
-const char* triggerSourceName(TriggerSource s);
 
 struct CycleSinks {
   // Cycle thread, when a cycle starts (the result is pending). Must not block.
@@ -43,8 +47,9 @@ class CycleRunner {
   CycleRunner(const config::CellConfig& cell, drivers::CameraWorker& camera, CycleSinks sinks);
   ~CycleRunner();
 
-  // Start-up, before start(): builds the method of every job with a folder (job.yaml,
-  // template, vision::makeLocator). Errors name the job folder's file and what is wrong.
+  // Start-up, before start(): builds every job's locator (a folder: job.yaml, template,
+  // vision::makeLocator; no folder: the untaught moments locator) and warms it up once.
+  // Errors name the job folder's file and what is wrong.
   Result<void> prepareJobs();
   void start();
   void stop();  // finishes the running cycle, answers queued triggers with INTERNAL, joins
@@ -69,10 +74,9 @@ class CycleRunner {
   const config::CellConfig& cell_;
   drivers::CameraWorker& camera_;
   CycleSinks sinks_;
-  vision::PinholePlaneModel model_;
-  // With a `calibration` section: the mapping from its files, or why they cannot be used
-  // (then every job answers NOT_CALIBRATED with that message).
-  std::optional<vision::calib::CameraPlaneMapping> calibrated_;
+  // The cell's pixel -> robot mapping, or why it cannot be had (then every job answers
+  // NOT_CALIBRATED with that message).
+  std::unique_ptr<vision::calib::PixelMapping> mapping_;
   std::string calibrationError_;
   std::thread thread_;
   std::mutex mutex_;
@@ -82,7 +86,11 @@ class CycleRunner {
   std::uint32_t nextCycleId_ = 1;
   std::atomic<std::uint64_t> overruns_{0};
   drivers::Frame frame_;
-  std::map<int, std::unique_ptr<vision::Locator>> locators_;  // by job id; jobs with a folder
+  struct PreparedJob {
+    std::unique_ptr<vision::Locator> locator;
+    vision::PartPoseRules rules;
+  };
+  std::map<int, PreparedJob> jobs_;  // by job id, every configured job (prepareJobs)
 };
 
 }  // namespace vgr::daemon

@@ -27,11 +27,11 @@ namespace {
 double round3(double v) { return std::round(v * 1000.0) / 1000.0 + 0.0; }
 }  // namespace
 
-std::string Journal::toJson(const CycleResult& r, const char* triggerSource) {
+std::string Journal::toJson(const CycleResult& r) {
   nlohmann::json j;
   j["cycle"] = r.cycleId;
   j["time"] = std::chrono::duration_cast<std::chrono::milliseconds>(r.triggerTime.time_since_epoch()).count() / 1000.0;
-  j["trigger"] = triggerSource;
+  j["trigger"] = triggerSourceName(r.trigger);
   j["job"] = r.jobId;
   j["status"] = statusCode(r.status);
   j["status_name"] = std::string(statusName(r.status));
@@ -47,15 +47,15 @@ std::string Journal::toJson(const CycleResult& r, const char* triggerSource) {
                      {"rz_deg", round3(e.rz)}, {"ry_deg", round3(e.ry)}, {"rx_deg", round3(e.rx)},
                      {"dx_mm", round3(p.offset.x)}, {"dy_mm", round3(p.offset.y)}, {"drz_deg", round3(o.rz)},
                      {"u_px", round3(p.uPx)}, {"v_px", round3(p.vPx)}, {"angle_img_deg", round3(p.angleImgDeg)},
-                     {"score", round3(p.score)}});
+                     {"score", round3(p.score)}, {"label", p.label}});
   }
   j["parts"] = std::move(parts);
   return j.dump();
 }
 
-void Journal::append(const CycleResult& r, const char* triggerSource) {
+void Journal::append(const CycleResult& r) {
   if (!file_) return;
-  const std::string line = toJson(r, triggerSource);
+  const std::string line = toJson(r);
   std::fprintf(file_, "%s\n", line.c_str());
   std::fflush(file_);
 }

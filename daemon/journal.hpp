@@ -20,8 +20,9 @@ class Journal {
 
   // Creates the parent folder if needed; error names the path.
   Result<void> open(const std::string& path);
-  void append(const CycleResult& r, const char* triggerSource);
-  static std::string toJson(const CycleResult& r, const char* triggerSource);
+  void append(const CycleResult& r);
+  // "trigger" is the cycle's TriggerSource ("modbus", "robot", "operator").
+  static std::string toJson(const CycleResult& r);
 
  private:
   std::FILE* file_ = nullptr;

@@ -11,6 +11,7 @@ namespace vgr::daemon {
 struct ResultStore::Waiter {
   std::string robot;
   int job = 0;
+  std::uint32_t cycle = 0;  // 0: the next result of the job; else only this cycle's (TRIG)
   protocol::ReplyFn reply;
   boost::asio::steady_timer timer;
   bool done = false;
@@ -106,7 +107,7 @@ void ResultStore::onResult(const CycleResult& r) {
   // result it asked for exists).
   for (auto it = waiters_.begin(); it != waiters_.end();) {
     Waiter& w = *it->second;
-    if (w.job != r.jobId || w.done) {
+    if (w.job != r.jobId || w.done || (w.cycle != 0 && w.cycle != r.cycleId)) {
       ++it;
       continue;
     }
@@ -139,6 +140,23 @@ void ResultStore::handle(const std::string& robot, const protocol::RobotRequest&
     return;
   }
 
+  if (req.command == protocol::Command::Trigger) {
+    protocol::RobotReply r;
+    if (!trigger_) {
+      r.status = Status::UnknownCommand;
+      reply(r);
+      return;
+    }
+    const std::uint32_t cycle = trigger_(job);
+    if (cycle == 0) {
+      r.status = Status::BusyOverrun;
+      reply(r);
+      return;
+    }
+    wait(robot, job, cycle, std::move(reply), s.policy.replyDeadlineMs);
+    return;
+  }
+
   if (req.last) {
     auto it = latest_.find(job);
     if (it != latest_.end()) {
@@ -159,17 +177,23 @@ void ResultStore::handle(const std::string& robot, const protocol::RobotRequest&
   }
 
   // Wait for the next result of this job, at most until the robot's deadline.
+  wait(robot, job, 0, std::move(reply), s.policy.replyDeadlineMs);
+}
+
+void ResultStore::wait(const std::string& robot, int job, std::uint32_t cycle, protocol::ReplyFn reply, int deadlineMs) {
   auto w = std::make_shared<Waiter>(io_);
   w->robot = robot;
   w->job = job;
+  w->cycle = cycle;
   w->reply = std::move(reply);
   const std::uint64_t id = nextWaiter_++;
   waiters_[id] = w;
-  w->timer.expires_after(std::chrono::milliseconds(s.policy.replyDeadlineMs));
+  w->timer.expires_after(std::chrono::milliseconds(deadlineMs));
   w->timer.async_wait([this, id, w](const boost::system::error_code& ec) {
     if (ec || w->done) return;
     protocol::RobotReply r;
-    r.status = running_ ? Status::ResultNotReady : Status::NoNewTrigger;
+    // A triggered cycle is queued or running even before onCycleStarted has been seen.
+    r.status = running_ || w->cycle != 0 ? Status::ResultNotReady : Status::NoNewTrigger;
     answer(*w, r);
     waiters_.erase(id);
   });

@@ -15,11 +15,16 @@
 //    and no cycle is running.
 //  - JOB,<n>: the robot's current job becomes n (0 OK, or -7 for an unknown job), kept
 //    across reconnects until the daemon restarts.
+//  - TRIG[,<job>]: the robot asks for a part with no PLC in the loop: a cycle of the job is
+//    triggered (TriggerSource::Robot) and the request waits for THAT cycle's result, served
+//    like GET (its next part in the robot's order), up to the reply deadline, then
+//    2 RESULT_NOT_READY; -3 BUSY_OVERRUN at once when the cycle queue is full.
 // Unknown job anywhere: -7 JOB_NOT_FOUND.
 // Lives on the I/O thread: every method must be called there (post from elsewhere).
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -55,6 +60,10 @@ class ResultStore {
 
   // Registers a robot (by endpoint name). A robot never registered gets the default policy.
   void addRobot(const std::string& robot, RobotPolicy policy);
+  // What TRIG calls (on the I/O thread; must not block): the new cycle id, 0 when refused.
+  // Without one, TRIG is answered -1 UNKNOWN_COMMAND.
+  using TriggerFn = std::function<std::uint32_t(int jobId)>;
+  void setTrigger(TriggerFn trigger) { trigger_ = std::move(trigger); }
 
   void onCycleStarted(std::uint32_t cycleId, int jobId);
   void onResult(const CycleResult& result);
@@ -84,7 +93,11 @@ class ResultStore {
   bool serveNext(const std::string& robot, int job, const protocol::ReplyFn& reply);
   void answer(Waiter& w, const protocol::RobotReply& reply);
 
+  // Parks a request until a result of `job` (cycle 0: any; else that cycle) or the deadline.
+  void wait(const std::string& robot, int job, std::uint32_t cycle, protocol::ReplyFn reply, int deadlineMs);
+
   boost::asio::io_context& io_;
+  TriggerFn trigger_;
   std::set<int> knownJobs_;
   std::map<int, CycleResult> latest_;  // per job
   std::map<std::string, RobotState> robots_;

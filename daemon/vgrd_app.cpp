@@ -15,25 +15,22 @@
 #include "core/log.hpp"
 #include "daemon/cycle_runner.hpp"
 #include "daemon/journal.hpp"
+#include "daemon/plc_links.hpp"
 #include "daemon/result_store.hpp"
 #include "drivers/camera.hpp"
 #include "drivers/camera_worker.hpp"
-#include "protocol/modbus_client_trigger.hpp"
-#include "protocol/modbus_server.hpp"
+#include "protocol/modbus_map.hpp"  // modbusResultFrom
 #include "protocol/robot_server.hpp"
 
 namespace vgr::daemon {
 
 namespace asio = boost::asio;
 
-// Modbus result deadline = cell.cycle_deadline_ms + this (ms): the daemon's own deadline
-// answers first; this only catches a hung cycle thread.
-constexpr int kModbusDeadlineSlackMs = 100;
-
 struct VgrdApp::Impl {
   config::CellConfig cfg;
   asio::io_context io;
   asio::signal_set signals{io, SIGTERM, SIGINT};
+  asio::signal_set operatorSignal{io, SIGUSR1};
   asio::steady_timer readyTimer{io};
   asio::steady_timer watchdogTimer{io};
   asio::steady_timer statsTimer{io};
@@ -41,8 +38,8 @@ struct VgrdApp::Impl {
   std::unique_ptr<drivers::CameraWorker> camera;
   std::unique_ptr<CycleRunner> cycles;
   std::unique_ptr<ResultStore> results;
-  std::unique_ptr<protocol::ModbusServer> modbus;
-  std::unique_ptr<protocol::ModbusClientTrigger> modbusClient;  // modbus.client.enabled
+  // The PLC side: the Modbus server and/or client mode, behind one interface.
+  std::vector<std::unique_ptr<protocol::PlcLink>> plcs;
   std::vector<std::unique_ptr<protocol::RobotServer>> robots;
   bool notifiedReady = false;
   std::uint64_t watchdogUsec = 0;
@@ -50,35 +47,35 @@ struct VgrdApp::Impl {
   explicit Impl(config::CellConfig c) : cfg(std::move(c)) {}
 
   void publish(const CycleResult& r) {
-    // Cycle thread. PLC first (one lock inside), then robots (posted to the I/O thread),
-    // then the journal (disk) last.
-    if (modbus || modbusClient) {
-      protocol::ModbusResult m;
-      m.cycleId = r.cycleId;
-      m.status = r.status;
-      m.jobId = r.jobId;
-      m.numFound = static_cast<int>(r.parts.size());
-      if (r.status == Status::Ok && !r.parts.empty()) {
-        const auto& p = r.parts.front();
-        const auto e = toEulerZyxDeg(p.pose);
-        // + 0.0: a PLC shows -0.0 as "-0"; nobody wants that on an HMI.
-        m.x = p.pose.x + 0.0;
-        m.y = p.pose.y + 0.0;
-        m.z = p.pose.z + 0.0;
-        m.r1 = e.rx + 0.0;
-        m.r2 = e.ry + 0.0;
-        m.r3 = e.rz + 0.0;
-        m.score = p.score;
-      }
-      if (modbus) modbus->publishResult(m);
-      if (modbusClient) modbusClient->publishResult(m);
+    // Cycle thread. PLC first (one lock inside each link), then robots (posted to the I/O
+    // thread), then the journal (disk) last. A PLC gets the results of the cycles it
+    // triggered (a robot's or the operator's cycle would raise RESULT_VALID for a trigger
+    // the PLC never sent); robots and the journal get every result.
+    if (r.trigger == TriggerSource::Modbus && !plcs.empty()) {
+      const protocol::ModbusResult m = protocol::modbusResultFrom(r);
+      for (auto& plc : plcs) plc->publishResult(m);
     }
     asio::post(io, [this, r] { results->onResult(r); });
-    journal.append(r, "modbus");
+    journal.append(r);
     if (r.status == Status::Ok)
       log::debug("cycle", "cycle {} ok in {:.1f} ms", r.cycleId, r.totalMs);
     else
       log::info("cycle", "cycle {} ended {} ({})", r.cycleId, statusCode(r.status), statusName(r.status));
+  }
+
+  void setPlcReady(bool ready) {
+    for (auto& plc : plcs) plc->setReady(ready);
+  }
+
+  void waitOperatorTrigger() {
+    // SIGUSR1 (`systemctl kill -s USR1 vgrd`): the operator triggers the first job once.
+    operatorSignal.async_wait([this](const boost::system::error_code& ec, int) {
+      if (ec) return;
+      const std::uint32_t id = cycles->submit(0, TriggerSource::Operator);
+      if (id == 0) log::warn("cycle", "operator trigger refused: queue full");
+      else log::info("cycle", "operator trigger: cycle {}", id);
+      waitOperatorTrigger();
+    });
   }
 
   void checkReady() {
@@ -87,11 +84,12 @@ struct VgrdApp::Impl {
       // READY goes up with the first frame the camera can give: a PLC that triggers the
       // moment it sees READY gets a part, not -4. Later camera loss keeps READY (triggers
       // end in -4 CAMERA_ERROR within the deadline, so the PLC sees the fault).
-      if (modbus) modbus->setReady(true);
-      if (modbusClient) modbusClient->setReady(true);
+      setPlcReady(true);
       sd_notify(0, "READY=1\nSTATUS=camera streaming, servers listening");
-      log::info("main", "ready: camera streaming, Modbus on {}:{}, {} robot endpoint(s)", cfg.modbus.bind,
-                modbus ? modbus->port() : 0, robots.size());
+      std::string links;
+      for (const auto& plc : plcs) links += (links.empty() ? "" : ", ") + plc->describe();
+      log::info("main", "ready: camera streaming, PLC: {}, {} robot endpoint(s)", links.empty() ? "none" : links,
+                robots.size());
       return;
     }
     if (notifiedReady) return;
@@ -128,8 +126,7 @@ VgrdApp::VgrdApp(config::CellConfig config) : impl_(std::make_unique<Impl>(std::
 
 VgrdApp::~VgrdApp() {
   // Order: stop producers of work before what they feed.
-  if (impl_->modbus) impl_->modbus->stop();
-  if (impl_->modbusClient) impl_->modbusClient->stop();
+  for (auto& plc : impl_->plcs) plc->stop();
   if (impl_->cycles) impl_->cycles->stop();
   if (impl_->camera) impl_->camera->stop();
   for (auto& r : impl_->robots) r->stop();
@@ -146,6 +143,7 @@ Result<void> VgrdApp::start() {
   std::set<int> jobs;
   for (const auto& j : s.cfg.jobs) jobs.insert(j.id);
   s.results = std::make_unique<ResultStore>(s.io, jobs);
+  s.results->setTrigger([&s](int jobId) { return s.cycles->submit(jobId, TriggerSource::Robot); });
 
   CycleSinks sinks;
   sinks.onStarted = [&s](std::uint32_t id, int job) { asio::post(s.io, [&s, id, job] { s.results->onCycleStarted(id, job); }); };
@@ -156,9 +154,7 @@ Result<void> VgrdApp::start() {
   for (const auto& rc : s.cfg.robots) {
     protocol::RobotEndpoint ep;
     ep.name = rc.name;
-    const auto dialect = protocol::parseDialect(config::dialectName(rc.dialect));
-    if (!dialect) return fail(Status::Internal, "robot '" + rc.name + "': unknown dialect");
-    ep.dialect = *dialect;
+    ep.dialect = rc.dialect;
     ep.bind = rc.bind;
     ep.port = rc.port;
     ep.maxClients = static_cast<std::size_t>(rc.maxClients);
@@ -184,40 +180,9 @@ Result<void> VgrdApp::start() {
     s.robots.push_back(std::move(server));
   }
 
-  if (s.cfg.modbus.enabled) {
-    protocol::ModbusOptions mo;
-    mo.bind = s.cfg.modbus.bind;
-    mo.port = s.cfg.modbus.port;
-    mo.floatOrder = s.cfg.modbus.floatWordOrder == config::WordOrder::HighWordFirst ? protocol::WordOrder::HighWordFirst
-                                                                                     : protocol::WordOrder::LowWordFirst;
-    mo.maxClients = s.cfg.modbus.maxClients;
-    mo.requireTriggerEnable = s.cfg.modbus.requireTriggerEnable;
-    // Backstop behind the cycle deadline: the PLC is answered even if the cycle thread hangs.
-    mo.resultDeadline = std::chrono::milliseconds(s.cfg.cycleDeadlineMs + kModbusDeadlineSlackMs);
-    s.modbus = std::make_unique<protocol::ModbusServer>(
-        mo, [&s](int jobId) { return s.cycles->submit(jobId, TriggerSource::Modbus); });
-    if (auto r = s.modbus->start(); !r) return r;
-  }
-  if (s.cfg.modbus.client.enabled) {
-    const auto& c = s.cfg.modbus.client;
-    protocol::ModbusClientOptions co;
-    co.host = c.host;
-    co.port = c.port;
-    co.unitId = c.unitId;
-    co.input = c.trigger == config::TriggerInputKind::Coil ? protocol::ModbusClientOptions::Input::Coil
-                                                            : protocol::ModbusClientOptions::Input::DiscreteInput;
-    co.inputAddress = static_cast<std::uint16_t>(c.triggerAddress);
-    co.statusAddress = static_cast<std::uint16_t>(c.statusAddress);
-    co.poll = std::chrono::milliseconds(c.pollMs);
-    co.debounce = std::chrono::milliseconds(c.debounceMs);
-    co.reconnect = std::chrono::milliseconds(c.reconnectMs);
-    co.floatOrder = s.cfg.modbus.floatWordOrder == config::WordOrder::HighWordFirst ? protocol::WordOrder::HighWordFirst
-                                                                                     : protocol::WordOrder::LowWordFirst;
-    co.jobId = c.job;
-    co.resultDeadline = std::chrono::milliseconds(s.cfg.cycleDeadlineMs + kModbusDeadlineSlackMs);
-    s.modbusClient = std::make_unique<protocol::ModbusClientTrigger>(
-        co, [&s](int jobId) { return s.cycles->submit(jobId, TriggerSource::Modbus); });
-    if (auto r = s.modbusClient->start(); !r) return r;
+  for (auto& plc : makePlcLinks(s.cfg, [&s](int jobId) { return s.cycles->submit(jobId, TriggerSource::Modbus); })) {
+    if (auto r = plc->start(); !r) return r;
+    s.plcs.push_back(std::move(plc));
   }
 
   s.camera->start();
@@ -234,14 +199,14 @@ int VgrdApp::run() {
     s.io.stop();
   });
   if (sd_watchdog_enabled(0, &s.watchdogUsec) > 0 && s.watchdogUsec > 0) s.kickWatchdog();
+  s.waitOperatorTrigger();
   s.checkReady();
   s.statsTimer.expires_after(std::chrono::seconds(60));
   s.statsTimer.async_wait([&s](const boost::system::error_code& ec) {
     if (!ec) s.logStats();
   });
   s.io.run();
-  if (s.modbus) s.modbus->setReady(false);
-  if (s.modbusClient) s.modbusClient->setReady(false);
+  s.setPlcReady(false);
   s.logStats();
   return 0;
 }

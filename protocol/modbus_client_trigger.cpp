@@ -10,6 +10,7 @@
 #include <condition_variable>
 #include <exception>
 #include <mutex>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -253,5 +254,9 @@ ModbusClientTrigger::Counters ModbusClientTrigger::counters() const {
 }
 
 bool ModbusClientTrigger::connected() const { return impl_->isConnected.load(); }
+
+std::string ModbusClientTrigger::describe() const {
+  return "Modbus client of " + impl_->options.host + ":" + std::to_string(impl_->options.port);
+}
 
 }  // namespace vgr::protocol

@@ -28,6 +28,7 @@
 
 #include "core/result.hpp"
 #include "protocol/modbus_map.hpp"
+#include "protocol/plc_link.hpp"
 
 namespace vgr::protocol {
 
@@ -66,10 +67,10 @@ struct ModbusClientOptions {
 // Words written to the PLC: registers 16..45 of the map.
 inline constexpr int kClientBlockWords = modbus::kR3Int - modbus::kStatus + 1;
 
-class ModbusClientTrigger {
+class ModbusClientTrigger final : public PlcLink {
  public:
   // Same contract as ModbusServer::TriggerHandler: returns the cycle id or 0 to refuse.
-  using TriggerHandler = std::function<std::uint32_t(int jobId)>;
+  using TriggerHandler = PlcLink::TriggerHandler;
 
   struct Counters {
     std::uint64_t triggers = 0;   // debounced rising edges
@@ -81,17 +82,18 @@ class ModbusClientTrigger {
   };
 
   ModbusClientTrigger(ModbusClientOptions options, TriggerHandler onTrigger);
-  ~ModbusClientTrigger();  // stops and joins
+  ~ModbusClientTrigger() override;  // stops and joins
   ModbusClientTrigger(const ModbusClientTrigger&) = delete;
   ModbusClientTrigger& operator=(const ModbusClientTrigger&) = delete;
 
   // Starts the client thread; it connects (and reconnects) on its own. Fails on bad
   // options or when already started.
-  Result<void> start();
-  void stop();  // idempotent
+  Result<void> start() override;
+  void stop() override;  // idempotent
 
-  void setReady(bool ready);
-  void publishResult(const ModbusResult& r);
+  void setReady(bool ready) override;
+  void publishResult(const ModbusResult& r) override;
+  std::string describe() const override;
   Counters counters() const;
   bool connected() const;
 

@@ -4,7 +4,31 @@
 #include <bit>
 #include <cmath>
 
+#include "core/cycle.hpp"
+#include "core/pose.hpp"
+
 namespace vgr::protocol {
+
+ModbusResult modbusResultFrom(const CycleResult& r) {
+  ModbusResult m;
+  m.cycleId = r.cycleId;
+  m.status = r.status;
+  m.jobId = r.jobId;
+  m.numFound = static_cast<int>(r.parts.size());
+  if (r.status == Status::Ok && !r.parts.empty()) {
+    const auto& p = r.parts.front();
+    const auto e = toEulerZyxDeg(p.pose);
+    m.x = p.pose.x + 0.0;  // + 0.0: -0.0 -> 0.0
+    m.y = p.pose.y + 0.0;
+    m.z = p.pose.z + 0.0;
+    m.r1 = e.rx + 0.0;
+    m.r2 = e.ry + 0.0;
+    m.r3 = e.rz + 0.0;
+    m.score = p.score;
+    m.label = p.label;
+  }
+  return m;
+}
 
 namespace modbus {
 
@@ -166,6 +190,7 @@ void ModbusMap::write(const ModbusResult& r) {
   const int code = statusCode(r.status);
   set(kNumFound, toInt16Register(r.numFound));
   set(kCurrentJob, toInt16Register(r.jobId));
+  set(kLabel, toInt16Register(r.label));
   writeFloat(kX, r.x);
   writeFloat(kY, r.y);
   writeFloat(kZ, r.z);

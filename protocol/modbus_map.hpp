@@ -50,12 +50,13 @@
 #include <span>
 
 #include "core/status.hpp"
+#include "protocol/wire_types.hpp"  // WordOrder
+
+namespace vgr {
+struct CycleResult;
+}
 
 namespace vgr::protocol {
-
-// Word order of a float32 spread over two registers. HighWordFirst = "ABCD": the register
-// at the lower address holds the sign/exponent half, each register big-endian on the wire.
-enum class WordOrder { HighWordFirst, LowWordFirst };
 
 // One vision result as the PLC sees it. Units: x, y, z in mm; r1, r2, r3 in degrees
 // (r1 = rx, r2 = ry, r3 = rz); score in [0, 1].
@@ -65,7 +66,14 @@ struct ModbusResult {
   int numFound = 0;
   double x = 0, y = 0, z = 0, r1 = 0, r2 = 0, r3 = 0, score = 0;
   int jobId = 0;
+  int label = 0;  // the best part's label (paper 002's classes), 0 = unclassified
 };
+
+// The registers' view of a cycle result (owned here, so every PLC link shows the same):
+// status, cycle, job and part count, and for an Ok result its best part (parts.front())
+// in mm and Z-Y-X Euler degrees (r1 = rx, r2 = ry, r3 = rz) with its score. -0.0 is
+// written as 0.0 (a PLC's HMI shows "-0" otherwise).
+ModbusResult modbusResultFrom(const CycleResult& result);
 
 namespace modbus {
 
@@ -82,6 +90,7 @@ inline constexpr std::uint16_t kAcqId = 18;       // low 16 bits of the cycle be
 inline constexpr std::uint16_t kResultId = 19;    // low 16 bits of the cycle of the result
 inline constexpr std::uint16_t kNumFound = 20;    // int16
 inline constexpr std::uint16_t kCurrentJob = 21;  // int16
+inline constexpr std::uint16_t kLabel = 22;       // int16: the best part's label (0 = unclassified)
 inline constexpr std::uint16_t kX = 24;           // float32, mm (24-25)
 inline constexpr std::uint16_t kY = 26;           // float32, mm
 inline constexpr std::uint16_t kZ = 28;           // float32, mm

@@ -18,6 +18,7 @@
 #include <cstring>
 #include <exception>
 #include <mutex>
+#include <string>
 #include <thread>
 #include <utility>
 #include <vector>
@@ -296,6 +297,10 @@ void ModbusServer::publishResult(const ModbusResult& r) {
 }
 
 std::uint16_t ModbusServer::port() const { return impl_->boundPort != 0 ? impl_->boundPort : impl_->options.port; }
+
+std::string ModbusServer::describe() const {
+  return "Modbus server " + impl_->options.bind + ":" + std::to_string(port());
+}
 
 std::uint16_t ModbusServer::holdingRegister(std::uint16_t address) const {
   std::lock_guard lock(impl_->mutex);

@@ -20,6 +20,7 @@
 #include "core/result.hpp"
 #include "core/status.hpp"
 #include "protocol/modbus_map.hpp"  // WordOrder, ModbusResult, register constants
+#include "protocol/plc_link.hpp"
 
 namespace vgr::protocol {
 
@@ -34,28 +35,29 @@ struct ModbusOptions {
   std::chrono::milliseconds resultDeadline{0};
 };
 
-class ModbusServer {
+class ModbusServer final : public PlcLink {
  public:
   // Called on the Modbus thread, under the map lock, when a trigger is accepted. Must not
   // block and must not call publishResult() synchronously (post it to another thread; a
   // synchronous call is deferred until the handler returns). Returns the cycle id the
   // daemon assigned (ACQ_ID = its low 16 bits), or 0 to refuse (the map then ends the
   // trigger with RESULT_VALID + ERROR_CODE -3 BUSY_OVERRUN).
-  using TriggerHandler = std::function<std::uint32_t(int jobId)>;
+  using TriggerHandler = PlcLink::TriggerHandler;
 
   ModbusServer(ModbusOptions options, TriggerHandler onTrigger);
-  ~ModbusServer();  // stops and joins
+  ~ModbusServer() override;  // stops and joins
   ModbusServer(const ModbusServer&) = delete;
   ModbusServer& operator=(const ModbusServer&) = delete;
 
   // Binds and listens (the error names bind address and port), then starts the thread.
   // Fails when already started.
-  Result<void> start();
+  Result<void> start() override;
   // Closes all connections and joins the thread. Idempotent; the map keeps its state.
-  void stop();
+  void stop() override;
 
-  void setReady(bool ready);                  // any thread
-  void publishResult(const ModbusResult& r);  // any thread; one lock, results before RESULT_ID before RESULT_VALID
+  void setReady(bool ready) override;                  // any thread
+  void publishResult(const ModbusResult& r) override;  // any thread; one lock, results before RESULT_ID before RESULT_VALID
+  std::string describe() const override;
 
   // The bound port once start() succeeded (the real one when options.port was 0), else
   // options.port.

@@ -282,6 +282,15 @@ Result<RobotRequest> parseRequest(std::string_view line) {
     req.job = *job;
     return req;
   }
+  if (fields[0] == "TRIG") {
+    req.command = Command::Trigger;
+    if (count == 1) return req;  // "TRIG": the robot's current job
+    if (count > 2) return fail(Status::BadArgument, "too many fields");
+    auto job = parseJob(fields[1]);
+    if (!job) return std::unexpected(job.error());
+    req.job = *job;
+    return req;
+  }
   if (fields[0] != "GET") return fail(Status::UnknownCommand, "unknown command");
   if (count == 1) return req;  // "GET": the robot's current job
 
@@ -391,6 +400,10 @@ std::optional<Result<RobotRequest>> RequestDecoder::next() {
       break;
     case binary::kCmdJob:
       req.command = Command::Job;
+      break;
+    case binary::kCmdTrigger:
+      req.command = Command::Trigger;
+      if (job == 0) return Result<RobotRequest>(req);
       break;
     default:
       return Result<RobotRequest>(fail(Status::UnknownCommand, "unknown binary command"));

@@ -14,23 +14,9 @@
 #include "core/pose.hpp"
 #include "core/result.hpp"
 #include "core/status.hpp"
+#include "protocol/wire_types.hpp"  // Dialect
 
 namespace vgr::protocol {
-
-// One wire dialect per robot endpoint, chosen in the cell config.
-enum class Dialect {
-  Ur,      // URScript client: socket_send_line("GET,<job>") / socket_read_ascii_float(8)
-  Abb,     // RAPID client: SocketSend \Str:="GET,<job>#" / SocketReceive \Str (<= 80 chars)
-  Fanuc,   // KAREL client: WRITE "GET,<job>" + CR / READ up to the line end, fixed columns
-  Binary,  // int32 big-endian frames (URCap socket_read_binary_integer, RAPID \Network)
-  Strict,  // paper 002 four-step push: <CMD>, <CMD>_wait_pos, pose frame, <CMD>_done
-};
-
-// "ur", "abb", "fanuc", "binary" or "strict" (lower case, exactly as written in
-// cell.yaml); nullopt otherwise.
-std::optional<Dialect> parseDialect(std::string_view text);
-// The cell.yaml spelling.
-std::string_view dialectName(Dialect dialect);
 
 // Longest request line accepted, terminator excluded. Real requests are ~12 bytes.
 inline constexpr std::size_t kMaxRequestBytes = 256;
@@ -77,8 +63,10 @@ inline constexpr int kMinJob = 1;
 inline constexpr int kMaxJob = 32767;
 
 enum class Command {
-  Get,  // "GET[,<job>[,LAST]]": the next part (or, with LAST, the latest reply again)
-  Job,  // "JOB,<job>": switch this robot's current job (what "GET" without a job means)
+  Get,      // "GET[,<job>[,LAST]]": the next part (or, with LAST, the latest reply again)
+  Job,      // "JOB,<job>": switch this robot's current job (what "GET" without a job means)
+  Trigger,  // "TRIG[,<job>]": start a cycle of the job and answer with its result (a robot
+            // asking for a part, with no PLC in the loop)
 };
 
 struct RobotRequest {
@@ -88,7 +76,7 @@ struct RobotRequest {
 };
 
 // Parses one request line (terminator already removed): "GET", "GET,<job>",
-// "GET,<job>,LAST" or "JOB,<job>". Commands and LAST are case-sensitive; spaces and tabs
+// "GET,<job>,LAST", "JOB,<job>", "TRIG" or "TRIG,<job>". Commands and LAST are case-sensitive; spaces and tabs
 // around fields are tolerated; job is a decimal integer in [1, 32767] without sign.
 // Errors: an unknown command -> Status::UnknownCommand (-1); a bad, empty or out-of-range
 // job or an unexpected extra field -> Status::BadArgument (-2).
@@ -108,6 +96,7 @@ inline constexpr std::size_t kReplyBytes = 40;
 inline constexpr std::int32_t kCmdGet = 1;      // job 0 = the robot's current job
 inline constexpr std::int32_t kCmdGetLast = 2;  // job 0 = the robot's current job
 inline constexpr std::int32_t kCmdJob = 3;      // job in [1, 32767]
+inline constexpr std::int32_t kCmdTrigger = 4;  // job 0 = the robot's current job
 // Encodes a request frame (robot side; used by tests and vgr-sim-robot).
 std::string encodeRequest(std::int32_t command, std::int32_t job);
 // Reads the int32 at byte offset `at` of a frame (big-endian). Precondition: at + 4 <= size.

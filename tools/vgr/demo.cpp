@@ -223,7 +223,7 @@ int runDemo(const DemoOptions& o) {
   std::map<std::string, ChildProcess> robots;
   for (const auto& r : cfg->robots) {
     if (r.dialect == config::Dialect::Strict) continue;  // a push protocol: not a poller
-    const std::string dialect = config::dialectName(r.dialect);
+    const std::string dialect(config::dialectName(r.dialect));
     auto p = ChildProcess::spawn({bin + "/vgr-sim-robot", "--dialect", dialect, "--host", r.bind, "--port",
                                   std::to_string(r.port), "--job", std::to_string(cfg->jobs.front().id), "--count", "0",
                                   "--interval-ms", "0", "--name", r.name, "--json"},

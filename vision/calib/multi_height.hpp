@@ -46,6 +46,8 @@ class MultiHeightMap {
   std::optional<Vec3> pixelToRobot(PixelPoint p, double heightMm) const;
 
   int segments() const { return segments_; }  // k of the first curve (all use the same rule)
+  int rows() const { return rows_; }
+  int cols() const { return cols_; }
 
  private:
   int rows_ = 0, cols_ = 0, segments_ = 0;

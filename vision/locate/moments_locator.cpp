@@ -2,16 +2,17 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <memory>
+#include <numbers>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "core/angles.hpp"
+#include "vision/locate/params.hpp"
 
 namespace vgr::vision {
-namespace {
-
-}  // namespace
 
 Result<std::vector<Detection>> locateByMoments(const cv::Mat& gray, const MomentsParams& params) {
   if (gray.empty() || gray.type() != CV_8UC1) return fail(Status::BadArgument, "moments: expected a non-empty 8-bit gray image");
@@ -81,6 +82,75 @@ Result<std::vector<Detection>> locateByMoments(const cv::Mat& gray, const Moment
   }
   std::sort(out.begin(), out.end(), [](const Detection& a, const Detection& b) { return a.score > b.score; });
   return out;
+}
+
+namespace {
+
+// "moments" with a template: the template's own blob gives the reference centroid and axis;
+// a live blob's rotation is its axis minus the template's, and the grasp point is the
+// template's grasp offset from the centroid turned by that rotation (y down, so a
+// counter-clockwise turn as displayed by a is (x, y) -> (x cos a + y sin a, -x sin a + y cos a)).
+class MomentsLocator final : public Locator {
+ public:
+  MomentsLocator(MomentsParams params, Detection reference, const TaughtTemplate& taught)
+      : params_(params), reference_(reference), taught_(taught) {}
+
+  std::string_view method() const override { return "moments"; }
+
+  Result<LocateOutput> locate(const cv::Mat& gray) override {
+    if (gray.empty() || gray.type() != CV_8UC1) return fail(Status::BadArgument, "moments: expected a non-empty 8-bit gray image");
+    cv::Rect roi(0, 0, gray.cols, gray.rows);
+    if (!taught_.searchRoi.empty())
+      roi &= cv::Rect(taught_.searchRoi.x, taught_.searchRoi.y, taught_.searchRoi.width, taught_.searchRoi.height);
+    auto found = locateByMoments(gray(roi), params_);
+    if (!found) return std::unexpected(found.error());
+    LocateOutput out;
+    const double gx = taught_.grasp.u - reference_.u, gy = taught_.grasp.v - reference_.v;
+    for (const Detection& d : *found) {
+      if (d.score < taught_.minScore) continue;
+      const double rot = normaliseDeg(d.angleDeg - reference_.angleDeg);
+      if (rot < taught_.angleMinDeg || rot > taught_.angleMaxDeg) continue;
+      const double a = rot * std::numbers::pi / 180.0;
+      Detection p = d;
+      p.u = roi.x + d.u + gx * std::cos(a) + gy * std::sin(a);
+      p.v = roi.y + d.v - gx * std::sin(a) + gy * std::cos(a);
+      p.angleDeg = rot;
+      out.parts.push_back(p);
+      if (static_cast<int>(out.parts.size()) >= taught_.maxParts) break;
+    }
+    return out;
+  }
+
+ private:
+  MomentsParams params_;
+  Detection reference_;
+  TaughtTemplate taught_;
+};
+
+}  // namespace
+
+Result<std::unique_ptr<Locator>> makeMomentsLocator(const cv::Mat& templateGray, const TaughtTemplate& taught) {
+  ParamReader r("moments", taught.params);
+  MomentsParams p;
+  p.threshold = r.integer("threshold", 0, 0, 255);
+  p.minAreaPx = r.number("min_area_px", p.minAreaPx, 1, 1e9);
+  p.maxAreaPx = r.number("max_area_px", p.maxAreaPx, 1, 1e9);
+  if (auto ok = r.finish(); !ok) return std::unexpected(ok.error());
+  if (p.maxAreaPx <= p.minAreaPx) return fail(Status::BadArgument, "moments: parameter 'max_area_px' must exceed 'min_area_px'");
+  auto ref = locateByMoments(templateGray, p);
+  if (!ref) return std::unexpected(ref.error());
+  if (ref->empty()) return fail(Status::BadArgument, "moments: no part found in the template image (check threshold and area limits)");
+  return std::make_unique<MomentsLocator>(p, ref->front(), taught);
+}
+
+std::unique_ptr<Locator> makeUntaughtMomentsLocator(const MomentsParams& params) {
+  // No template: the reference is the image origin at 0 degrees and the grasp point is the
+  // blob's centroid; every blob in the area range is a part (no score floor, no count cap),
+  // exactly what locateByMoments() reports.
+  TaughtTemplate taught;
+  taught.minScore = 0;
+  taught.maxParts = std::numeric_limits<int>::max();
+  return std::make_unique<MomentsLocator>(params, Detection{}, taught);
 }
 
 }  // namespace vgr::vision

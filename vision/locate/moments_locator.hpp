@@ -4,6 +4,7 @@
 // Pure image code: call from any one thread per instance; no allocation is retained.
 #pragma once
 
+#include <memory>
 #include <vector>
 
 #include "core/result.hpp"
@@ -27,5 +28,13 @@ struct MomentsParams {
 // the direction of its major axis in the image (not yet relative to a template: MomentsLocator
 // in locator.cpp does that). Errors: Status::BadArgument for a wrong image type.
 Result<std::vector<Detection>> locateByMoments(const cv::Mat& gray, const MomentsParams& params);
+
+// Method "moments" of a taught job: the template's own blob is the reference (params
+// "threshold", "min_area_px", "max_area_px" from job.yaml).
+Result<std::unique_ptr<Locator>> makeMomentsLocator(const cv::Mat& templateGray, const TaughtTemplate& taught);
+
+// An untaught job (cell config keys threshold / min_area_px / max_area_px, no folder): every
+// blob in the area range is a part, its centroid the grasp point, its major axis the angle.
+std::unique_ptr<Locator> makeUntaughtMomentsLocator(const MomentsParams& params);
 
 }  // namespace vgr::vision

@@ -1,0 +1,30 @@
+// The two wire choices a cell config makes for the protocol layer, owned here and used by
+// config/ (which parses them from cell.yaml) and by the codecs and servers: the robot
+// dialect of an endpoint and the word order of a Modbus float32. Plain enums, no I/O.
+#pragma once
+
+#include <optional>
+#include <string_view>
+
+namespace vgr::protocol {
+
+// One wire dialect per robot endpoint, chosen in the cell config.
+enum class Dialect {
+  Ur,      // URScript client: socket_send_line("GET,<job>") / socket_read_ascii_float(8)
+  Abb,     // RAPID client: SocketSend \Str:="GET,<job>#" / SocketReceive \Str (<= 80 chars)
+  Fanuc,   // KAREL client: WRITE "GET,<job>" + CR / READ up to the line end, fixed columns
+  Binary,  // int32 big-endian frames (URCap socket_read_binary_integer, RAPID \Network)
+  Strict,  // paper 002 four-step push: <CMD>, <CMD>_wait_pos, pose frame, <CMD>_done
+};
+
+// "ur", "abb", "fanuc", "binary" or "strict" (lower case, exactly as written in
+// cell.yaml); nullopt otherwise.
+std::optional<Dialect> parseDialect(std::string_view text);
+// The cell.yaml spelling.
+std::string_view dialectName(Dialect dialect);
+
+// Word order of a float32 spread over two registers. HighWordFirst = "ABCD": the register
+// at the lower address holds the sign/exponent half, each register big-endian on the wire.
+enum class WordOrder { HighWordFirst, LowWordFirst };
+
+}  // namespace vgr::protocol
