@@ -41,7 +41,7 @@ std::vector<calib::ViewDetection> cornerViews(const sim::TrueCamera& cam, const 
   return views;
 }
 
-// The bar (0.1 % focal, 0.5 px principal point) on corner-level data, per data design.
+// docs/calibration.md's bar (0.1 % focal, 0.5 px principal point) on corner-level data, per data design.
 // "pred. sd" is calibrateIntrinsics' own standard deviation (mean over seeds), "rms err" the
 // RMS of the actual error over the seeds: the two agree when the std dev is trustworthy.
 void intrinsicsTable(int seeds) {

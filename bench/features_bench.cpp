@@ -15,7 +15,7 @@
 #include <fmt/core.h>
 #include <opencv2/core.hpp>
 
-#include "tests/unit/locate_test_images.hpp"
+#include "sim/synth_part.hpp"
 #include "vision/locate/locator.hpp"
 
 int main(int argc, char** argv) {
@@ -42,8 +42,8 @@ int main(int argc, char** argv) {
     for (const auto& m : vgr::vision::locatorMethods())
       if (m != "moments") methods.push_back(m);
 
-  const auto part = vgr::test::makeTexturedPart(multi);
-  const auto templ = vgr::test::makeTemplate(part, 30, heightFactor);
+  const auto part = vgr::sim::synth::makeTexturedPart(multi);
+  const auto templ = vgr::sim::synth::makeTemplate(part, 30, heightFactor);
   const cv::Size size(1280, 1024);
   for (const auto& method : methods) {
     vgr::vision::TaughtTemplate taught;
@@ -61,22 +61,22 @@ int main(int argc, char** argv) {
     int tpN = 0;
     std::vector<double> times;
     for (int k = 0; k < count; ++k) {
-      const auto pose = vgr::test::randomPose(rng, size, angle);
-      const cv::Mat img = vgr::test::renderScene(part, {pose}, size, noise, seed * 100000u + static_cast<unsigned>(k));
+      const auto pose = vgr::sim::synth::randomPose(rng, size, angle);
+      const cv::Mat img = vgr::sim::synth::renderScene(part, {pose}, size, noise, seed * 100000u + static_cast<unsigned>(k));
       const auto t0 = std::chrono::steady_clock::now();
       auto out = (*loc)->locate(img);
       times.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
       if (!out || out->parts.empty()) continue;
       ++found;
       const auto& d = out->parts.front();
-      const double pe = std::hypot(d.u - pose.u, d.v - pose.v), ae = vgr::test::angleDiffDeg(d.angleDeg, pose.angleDeg);
+      const double pe = std::hypot(d.u - pose.u, d.v - pose.v), ae = vgr::sim::synth::angleDiffDeg(d.angleDeg, pose.angleDeg);
       posSum += pe;
       angSum += ae;
       posMax = std::max(posMax, pe);
       angMax = std::max(angMax, ae);
       if (pe <= posTol && ae <= angTol) ++ok;
       if (!out->matches.empty()) {
-        tpSum += vgr::test::matchTruePositiveRate(out->matches, pose, templ.grasp);
+        tpSum += vgr::sim::synth::matchTruePositiveRate(out->matches, pose, templ.grasp);
         ++tpN;
       }
     }

@@ -18,7 +18,8 @@
 #include <fmt/core.h>
 #include <opencv2/core.hpp>
 
-#include "bench/locate_scenes.hpp"
+#include "core/angles.hpp"
+#include "sim/locate_scenes.hpp"
 #include "vision/locate/locator.hpp"
 
 namespace {
@@ -66,8 +67,8 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   if (methods.empty()) methods = vgr::vision::locatorMethods();
 
-  const auto renderer = vgr::bench::makeRenderer(width, height, focal, camHeight, sigma, seed);
-  const auto tp = vgr::bench::makeTemplate(renderer, templateAngle, 20, seed * 7919 + 3);
+  const auto renderer = vgr::sim::makeRenderer(width, height, focal, camHeight, sigma, seed);
+  const auto tp = vgr::sim::makeSceneTemplate(renderer, templateAngle, 20, seed * 7919 + 3);
   vgr::vision::TaughtTemplate taught;
   taught.grasp = drawnTruth ? tp.graspDrawn : tp.grasp;
   taught.angleMinDeg = -range;
@@ -88,10 +89,10 @@ int main(int argc, char** argv) {
   std::vector<vgr::sim::SceneTruth> truths;
   for (int i = 0; i < images; ++i) {
     const double angle = range >= 180 ? da(rng) : da(rng);
-    truths.push_back(vgr::bench::truthAt(renderer, du(rng), dv(rng), tp.truth.angleImgDeg + angle));
+    truths.push_back(vgr::sim::truthAt(renderer, du(rng), dv(rng), tp.truth.angleImgDeg + angle));
     renderer.renderTruth(truths.back(), seed * 7777 + static_cast<std::uint64_t>(i), imgs[i]);
     if (drawnTruth) {
-      const auto c = vgr::bench::drawnCentroid(renderer, truths.back());
+      const auto c = vgr::sim::drawnCentroid(renderer, truths.back());
       truths.back().uPx = c.u, truths.back().vPx = c.v;
     }
   }

@@ -62,7 +62,7 @@ struct CameraConfig {
 const char* triggerModeName(TriggerMode m);  // "software", "hardware", "free_run"
 
 // Pinhole camera above the conveyor plane: the skeleton's "known model" mapping. Real
-// calibration files replace it (issue: calibration).
+// calibration files replace it (docs/calibration.md).
 struct PlaneModelConfig {
   double fx = 1000, fy = 1000;     // px, > 0
   double cx = 639.5, cy = 511.5;   // px

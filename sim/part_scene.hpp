@@ -1,4 +1,4 @@
-// Dataset scenes for the localization methods (issue 6): flat parts and parts with 2-4 height
+// Dataset scenes for the localization methods (docs/datasets.md): flat parts and parts with 2-4 height
 // levels (a base plate with ribs and bosses, each an extruded polygon), projected through a
 // pinhole camera looking straight down, so that raised features shift radially away from
 // the image centre the farther the part is from it (paper 000's "projection difference",

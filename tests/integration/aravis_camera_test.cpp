@@ -9,16 +9,16 @@
 #include <opencv2/core.hpp>
 
 #include "config/cell_config.hpp"
-#include "core/child_process.hpp"
 #include "drivers/camera.hpp"
 #include "drivers/camera_worker.hpp"
 #include "sim/scene.hpp"
+#include "tests/support/processes.hpp"
 #include "vision/locate/moments_locator.hpp"
 
 namespace {
 
 using std::chrono::milliseconds;
-using vgr::ChildProcess;
+using vgr::test::ChildProcess;
 
 vgr::config::CellConfig simCell() {
   auto cfg = vgr::config::parseCellConfig(vgr::config::embeddedSimCellYaml(), "embedded");
@@ -27,12 +27,10 @@ vgr::config::CellConfig simCell() {
 }
 
 ChildProcess startEmulator(std::uint64_t seed, std::vector<std::string> extra = {}) {
-  std::vector<std::string> argv = {std::string(VGR_BIN_DIR) + "/vgr-sim-camera", "--seed", std::to_string(seed)};
-  argv.insert(argv.end(), extra.begin(), extra.end());
-  auto p = ChildProcess::spawn(argv);
-  EXPECT_TRUE(p.has_value());
-  EXPECT_TRUE(p->waitForLine("\"ready\"", milliseconds(5000)));
-  return std::move(*p);
+  std::vector<std::string> args = {"--seed", std::to_string(seed)};
+  args.insert(args.end(), extra.begin(), extra.end());
+  auto p = vgr::test::startEmulator(args);
+  return p ? std::move(*p) : ChildProcess();
 }
 
 TEST(AravisCamera, FramesMatchGroundTruth) {

@@ -1,7 +1,7 @@
 // `vgr calibrate` end to end on rendered synthetic sets: intrinsics (--json contract),
 // hand-eye from a folder of images + poses.txt, and the bad-input errors a user sees.
 // No sockets: the real `vgr` binary on files in a temporary folder.
-#include <sys/wait.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
@@ -14,6 +14,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "tests/support/command.hpp"
 #include "vision/calib/handeye.hpp"
 #include "vision/calib/intrinsics.hpp"
 #include "vision/calib/mapping.hpp"
@@ -29,15 +30,8 @@ struct CmdRun {
 };
 
 CmdRun vgr(const std::string& args) {
-  CmdRun r;
-  const std::string cmd = std::string(VGR_BIN_DIR) + "/vgr " + args + " 2>&1";
-  FILE* p = ::popen(cmd.c_str(), "r");
-  if (!p) return r;
-  char buf[4096];
-  while (std::fgets(buf, sizeof buf, p)) r.out += buf;
-  const int st = ::pclose(p);
-  r.rc = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  return r;
+  const auto r = vgr::test::runCommand(vgr::test::binPath("vgr") + " " + args + " 2>&1");
+  return {r.exitCode, r.out};
 }
 
 std::string lastLine(const std::string& s) {

@@ -1,4 +1,4 @@
-// The simulated cell is calibrated like a real one (issue 5): scripts/calibrate-sim-cell.sh
+// The simulated cell is calibrated like a real one (docs/calibration.md): scripts/calibrate-sim-cell.sh
 // renders plate views for the cell's camera, serves them with the camera emulator, grabs
 // them over Aravis with `vgr grab --save` and runs `vgr calibrate intrinsics / handeye /
 // plane` on the grabbed frames. Checked here against the simulator's true camera (the
@@ -58,14 +58,14 @@ TEST(calib_sim_cell, ScriptCalibratesTheCellFromEmulatorFramesToTheTrueCamera) {
   const vgr::vision::PinholePlaneModel truth(
       m.fx, m.fy, m.cx, m.cy, vgr::vision::PinholePlaneModel::downLookingCamera(m.camX, m.camY, m.camZ, m.camRzDeg), m.planeZ);
 
-  // Intrinsics: the issue's bar (focal within 0.1 %, principal point within 0.5 px).
+  // Intrinsics: docs/calibration.md's bar (focal within 0.1 %, principal point within 0.5 px).
   auto cam = calib::readIntrinsics((out / "intrinsics.yaml").string());
   ASSERT_TRUE(cam.has_value()) << cam.error().message;
   EXPECT_LT(std::abs(cam->cameraMatrix(0, 0) / m.fx - 1), 1e-3) << cam->cameraMatrix(0, 0);
   EXPECT_LT(std::abs(cam->cameraMatrix(1, 1) / m.fy - 1), 1e-3) << cam->cameraMatrix(1, 1);
   EXPECT_LT(std::hypot(cam->cameraMatrix(0, 2) - m.cx, cam->cameraMatrix(1, 2) - m.cy), 0.5);
 
-  // Hand-eye: X is the camera mount, within the issue's 0.5 mm / 0.05 deg.
+  // Hand-eye: X is the camera mount, within docs/calibration.md's 0.5 mm / 0.05 deg.
   auto he = calib::readHandEye((out / "handeye.yaml").string());
   ASSERT_TRUE(he.has_value()) << he.error().message;
   EXPECT_LT(std::hypot(he->x.x - m.camX, he->x.y - m.camY, he->x.z - m.camZ), 0.5)

@@ -1,13 +1,11 @@
 // vgrd with a `calibration` section whose files are missing: it starts, and a PLC-triggered
 // cycle is answered with -6 NOT_CALIBRATED; the log names the file and why.
-#include <sys/wait.h>
 
-#include <array>
-#include <cstdio>
 #include <regex>
 #include <sstream>
 
-#include "modbus_cell.hpp"
+#include "tests/support/command.hpp"
+#include "tests/support/modbus_cell.hpp"
 
 namespace {
 
@@ -15,14 +13,9 @@ using namespace std::chrono_literals;
 using vgr::test::ModbusCell;
 
 std::string run(const std::string& cmd, int* rc = nullptr) {
-  std::string out;
-  FILE* p = ::popen((cmd + " 2>&1").c_str(), "r");
-  if (p == nullptr) return out;
-  std::array<char, 4096> buf{};
-  for (std::size_t n; (n = std::fread(buf.data(), 1, buf.size(), p)) > 0;) out.append(buf.data(), n);
-  const int st = ::pclose(p);
-  if (rc) *rc = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  return out;
+  const auto r = vgr::test::runCommand(cmd + " 2>&1");
+  if (rc) *rc = r.exitCode;
+  return r.out;
 }
 
 std::string mbpoll(const std::string& args) { return "mbpoll -m tcp -p 1502 -a 1 -0 " + args; }

@@ -16,16 +16,16 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "config/cell_config.hpp"
-#include "core/child_process.hpp"
 #include "drivers/camera.hpp"
 #include "sim/scene.hpp"
+#include "tests/support/processes.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 using std::chrono::milliseconds;
-using vgr::ChildProcess;
+using vgr::test::ChildProcess;
 using vgr::drivers::CameraState;
 using vgr::drivers::FrameStatus;
 
@@ -50,10 +50,8 @@ class EmulatorDevice final : public Device {
  public:
   vgr::config::CameraConfig config() override { return simCell().camera; }
   void bringUp() override {
-    auto p = ChildProcess::spawn({std::string(VGR_BIN_DIR) + "/vgr-sim-camera", "--seed", "3"});
-    ASSERT_TRUE(p.has_value());
-    ASSERT_TRUE(p->waitForLine("\"ready\"", milliseconds(5000))) << "emulator did not start (port 3956 busy?)";
-    proc_ = std::make_unique<ChildProcess>(std::move(*p));
+    proc_ = vgr::test::startEmulator({"--seed", "3"});
+    ASSERT_NE(proc_, nullptr) << "emulator did not start (port 3956 busy?)";
   }
   void takeAway() override {
     if (proc_) proc_->kill9();

@@ -1,5 +1,5 @@
 // GVSP packet loss at full resolution: 1000 software triggers at 2448x2048 through `vgr grab`
-// (the real Aravis driver and vgrd's CameraWorker) against the emulator dropping one
+// (the real Aravis driver and the daemon's CameraWorker) against the emulator dropping one
 // GVSP packet in 10,000. The emulator cannot resend, so a lost packet is a lost frame.
 // Every trigger ends in a frame or a typed error; with one re-trigger allowed within the
 // deadline, at least 99.5 % of triggers get their frame. The emulator serves a pre-rendered
@@ -17,14 +17,14 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "config/cell_config.hpp"
-#include "core/child_process.hpp"
 #include "sim/scene.hpp"
+#include "tests/support/processes.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 using std::chrono::milliseconds;
-using vgr::ChildProcess;
+using vgr::test::ChildProcess;
 
 class CameraLoss : public ::testing::Test {
  protected:
@@ -38,12 +38,9 @@ class CameraLoss : public ::testing::Test {
     vgr::sim::SceneRenderer::fromCellConfig(cell).render(1, img);
     ASSERT_TRUE(cv::imwrite((dir_ / "images" / "scene.png").string(), img));
     configPath_ = *vgr::config::writeSimCell(dir_.string());  // + its calibration files
-    auto p = ChildProcess::spawn({std::string(VGR_BIN_DIR) + "/vgr-sim-camera", "--images", (dir_ / "images").string(),
-                                  "--loss", "0.0001"},
-                                 (dir_ / "camera.log").string());
-    ASSERT_TRUE(p.has_value());
-    ASSERT_TRUE(p->waitForLine("\"ready\"", milliseconds(10000)));
-    emulator_ = std::make_unique<ChildProcess>(std::move(*p));
+    emulator_ = vgr::test::startEmulator({"--images", (dir_ / "images").string(), "--loss", "0.0001"},
+                                         (dir_ / "camera.log").string(), milliseconds(10000));
+    ASSERT_NE(emulator_, nullptr);
   }
   void TearDown() override {
     emulator_.reset();

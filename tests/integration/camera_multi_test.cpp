@@ -13,24 +13,16 @@
 #include <opencv2/core.hpp>
 
 #include "config/cell_config.hpp"
-#include "core/child_process.hpp"
 #include "drivers/camera.hpp"
 #include "sim/scene.hpp"
+#include "tests/support/command.hpp"
+#include "tests/support/processes.hpp"
 
 namespace {
 
 using std::chrono::milliseconds;
-using vgr::ChildProcess;
 
-std::string run(const std::string& cmd) {
-  std::string out;
-  FILE* p = ::popen((cmd + " 2>&1").c_str(), "r");
-  if (p == nullptr) return out;
-  char buf[4096];
-  for (std::size_t n; (n = std::fread(buf, 1, sizeof buf, p)) > 0;) out.append(buf, n);
-  ::pclose(p);
-  return out;
-}
+std::string run(const std::string& cmd) { return vgr::test::runCommand(cmd + " 2>&1").out; }
 
 bool hasSecondLoopbackAddress() { return run("ip -4 addr show dev lo").find("127.0.0.2/") != std::string::npos; }
 
@@ -39,10 +31,8 @@ TEST(camera_multi, TwoCamerasBySerialEachServeTheirOwnScenes) {
   ASSERT_TRUE(hasSecondLoopbackAddress()) << "run `ip addr add 127.0.0.2/8 dev lo` (as root) once on this machine";
 
   constexpr std::uint64_t kSeed = 21;
-  auto emulator = ChildProcess::spawn({std::string(VGR_BIN_DIR) + "/vgr-sim-camera", "--seed", std::to_string(kSeed),
-                                       "--camera", "VGR-A@127.0.0.1", "--camera", "VGR-B@127.0.0.2"});
-  ASSERT_TRUE(emulator.has_value());
-  ASSERT_TRUE(emulator->waitForLine("\"ready\"", milliseconds(5000)));
+  auto emulator = vgr::test::startEmulator({"--seed", std::to_string(kSeed), "--camera", "VGR-A@127.0.0.1", "--camera", "VGR-B@127.0.0.2"});
+  ASSERT_NE(emulator, nullptr);
 
   const auto listed = nlohmann::json::parse(run(std::string(VGR_BIN_DIR) + "/vgr cameras --json"), nullptr, false);
   ASSERT_TRUE(listed.is_array()) << listed.dump();

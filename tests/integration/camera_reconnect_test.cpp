@@ -3,26 +3,20 @@
 // answered within the cycle deadline, the driver reconnects within 2 s of the camera's
 // return (vgrd logs "reconnected"), and cycles resume with status OK. vgrd is never restarted.
 #include <modbus.h>
-#include <unistd.h>
 
 #include <chrono>
-#include <filesystem>
-#include <fstream>
-#include <sstream>
+#include <cstdio>
 #include <string>
 #include <thread>
 
 #include <gtest/gtest.h>
 
-#include "config/cell_config.hpp"
-#include "core/child_process.hpp"
+#include "tests/support/sim_cell.hpp"
 
 namespace {
 
-namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 using std::chrono::milliseconds;
-using vgr::ChildProcess;
 
 struct PlcCycle {
   bool answered = false;
@@ -63,53 +57,21 @@ PlcCycle plcCycle(modbus_t* ctx, milliseconds timeout) {
   return c;
 }
 
-class CameraReconnect : public ::testing::Test {
+class CameraReconnect : public vgr::test::SimCell {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("vgr-camera-reconnect-" + std::to_string(::getpid()));
-    fs::create_directories(dir_);
-    configPath_ = *vgr::config::writeSimCell(dir_.string());  // + its calibration files
-    cfg_ = *vgr::config::parseCellConfig(vgr::config::embeddedSimCellYaml(), "embedded");
-  }
-  void TearDown() override {
-    vgrd_.reset();
-    camera_.reset();
-    std::error_code ec;
-    if (!HasFailure()) fs::remove_all(dir_, ec);
-  }
-  void startCamera() {
-    auto p = ChildProcess::spawn({std::string(VGR_BIN_DIR) + "/vgr-sim-camera", "--config", configPath_},
-                                 (dir_ / "camera.log").string());
-    ASSERT_TRUE(p.has_value());
-    ASSERT_TRUE(p->waitForLine("\"ready\"", milliseconds(5000)));
-    camera_ = std::make_unique<ChildProcess>(std::move(*p));
-  }
-  std::string vgrdLog() const {
-    std::ifstream in(dir_ / "vgrd.log");
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-  }
+  void SetUp() override { ASSERT_NO_FATAL_FAILURE(prepareCell()); }
+  std::string vgrdLog() const { return log("vgrd.log"); }
   int countInLog(const std::string& needle) const {
     const std::string log = vgrdLog();
     int n = 0;
     for (auto p = log.find(needle); p != std::string::npos; p = log.find(needle, p + 1)) ++n;
     return n;
   }
-
-  fs::path dir_;
-  std::string configPath_;
-  vgr::config::CellConfig cfg_;
-  std::unique_ptr<ChildProcess> camera_, vgrd_;
 };
 
 TEST_F(CameraReconnect, FiveCameraRestartsDuringARunOfVgrd) {
   startCamera();
-  auto p = ChildProcess::spawn({std::string(VGR_BIN_DIR) + "/vgrd", "--config", configPath_, "--journal",
-                                (dir_ / "journal.jsonl").string()},
-                               (dir_ / "vgrd.log").string());
-  ASSERT_TRUE(p.has_value());
-  vgrd_ = std::make_unique<ChildProcess>(std::move(*p));
+  ASSERT_NO_FATAL_FAILURE(startVgrd());
 
   modbus_t* ctx = modbus_new_tcp("127.0.0.1", 1502);
   bool connected = false;

@@ -2,14 +2,12 @@
 // emulator, vgrd mapping with the example's calibration files, PLC and three robot
 // simulators) for a few cycles, scored against the renderer's truth; and `--method`, which
 // teaches a job of another method on the textured part and runs the cell with it.
-#include <sys/wait.h>
 
-#include <array>
-#include <cstdio>
 #include <string>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include "tests/support/command.hpp"
 
 namespace {
 
@@ -19,14 +17,8 @@ struct DemoRun {
 };
 
 DemoRun demo(const std::string& args) {
-  DemoRun r;
-  FILE* p = ::popen((std::string(VGR_BIN_DIR) + "/vgr demo --quiet " + args + " 2>&1").c_str(), "r");
-  if (p == nullptr) return r;
-  std::array<char, 4096> buf{};
-  for (std::size_t n; (n = std::fread(buf.data(), 1, buf.size(), p)) > 0;) r.out.append(buf.data(), n);
-  const int st = ::pclose(p);
-  r.rc = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  return r;
+  const auto r = vgr::test::runCommand(vgr::test::binPath("vgr") + " demo --quiet " + args + " 2>&1");
+  return {r.exitCode, r.out};
 }
 
 nlohmann::json summary(const std::string& out) {

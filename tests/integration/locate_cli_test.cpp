@@ -1,11 +1,9 @@
 // The localization tools as users run them: `vgr sim render` -> `vgr teach` -> `vgr locate
 // --json` and `vgr eval --json`, checked against the dataset's truth.csv; bad input gets a
 // clear error and exit code 2.
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <array>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -13,26 +11,15 @@
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include "tests/support/command.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 
-struct Run {
-  int exitCode = -1;
-  std::string out;
-};
+using Run = vgr::test::CommandResult;
 
-Run vgr(const std::string& args) {
-  Run r;
-  FILE* p = ::popen((std::string(VGR_BIN_DIR) + "/vgr " + args + " 2>&1").c_str(), "r");
-  if (p == nullptr) return r;
-  std::array<char, 4096> buf{};
-  for (std::size_t n; (n = std::fread(buf.data(), 1, buf.size(), p)) > 0;) r.out.append(buf.data(), n);
-  const int st = ::pclose(p);
-  r.exitCode = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  return r;
-}
+Run vgr(const std::string& args) { return vgr::test::runCommand(vgr::test::binPath("vgr") + " " + args + " 2>&1"); }
 
 std::string lastLine(const std::string& s) {
   std::istringstream in(s);

@@ -3,17 +3,20 @@
 // and every cycle's pose (journal) is checked against the renderer's ground truth. A broken
 // job.yaml fails `vgrd --check` naming file, line and key; a method that cannot be built
 // from the job fails vgrd's start naming the job folder.
+#include <unistd.h>
+
 #include <modbus.h>
 
 #include <cmath>
+#include <fstream>
 #include <thread>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "config/job.hpp"
-#include "modbus_cell.hpp"
 #include "sim/scene.hpp"
+#include "tests/support/modbus_cell.hpp"
 
 namespace {
 
@@ -112,7 +115,7 @@ TEST_F(locate_vgrd_job, BrokenJobYamlFailsTheCheckNamingFileLineAndKey) {
   dir_ = jobDir_;
   const std::string cfgPath = (jobDir_ / "cell.yaml").string();
   std::ofstream(cfgPath) << withFolderJob(vgr::config::embeddedSimCellYaml(), folder, 0);
-  auto p = vgr::ChildProcess::spawn({bin("vgrd"), "--config", cfgPath, "--check"}, (jobDir_ / "check.log").string());
+  auto p = vgr::test::ChildProcess::spawn({bin("vgrd"), "--config", cfgPath, "--check"}, (jobDir_ / "check.log").string());
   ASSERT_TRUE(p.has_value());
   const int rc = p->wait(std::chrono::milliseconds(10000));
   const std::string out = log("check.log");
@@ -129,7 +132,7 @@ TEST_F(locate_vgrd_job, AMethodThatCannotBeBuiltStopsTheStartNamingTheJob) {
   std::string yaml = withFolderJob(vgr::config::embeddedSimCellYaml(), folder, 0);
   yaml.replace(yaml.find("journal: /tmp/vgr/journal.jsonl"), 31, "journal: " + (jobDir_ / "j.jsonl").string());
   std::ofstream(cfgPath) << yaml;
-  auto p = vgr::ChildProcess::spawn({bin("vgrd"), "--config", cfgPath}, (jobDir_ / "start.log").string());
+  auto p = vgr::test::ChildProcess::spawn({bin("vgrd"), "--config", cfgPath}, (jobDir_ / "start.log").string());
   ASSERT_TRUE(p.has_value());
   const int rc = p->wait(std::chrono::milliseconds(10000));
   const std::string out = log("start.log");

@@ -1,19 +1,23 @@
-// vgrd runs a taught job of every localization method in the simulated cell (issue 6): the
-// camera emulator serves the textured part (`sim.scene: part`, sim/cell_scenes.hpp) over
-// Aravis, a job is taught with the real `vgr teach` on the renderer's template, a libmodbus
-// PLC triggers in counter mode, and every cycle's pose in the journal is checked against
-// the renderer's ground truth in robot millimetres and degrees.
+// vgrd runs a taught job of every localization method in the simulated cell
+// (docs/localization.md): the camera emulator serves the textured part (`sim.scene: part`,
+// sim/cell_scenes.hpp) over Aravis, a job is taught with the real `vgr teach` on the
+// renderer's template, a libmodbus PLC triggers in counter mode, and every cycle's pose in
+// the journal is checked against the renderer's ground truth in robot millimetres and degrees.
+#include <unistd.h>
+
 #include <modbus.h>
 
 #include <cmath>
+#include <cstdio>
+#include <fstream>
 #include <thread>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/angles.hpp"
-#include "modbus_cell.hpp"
 #include "sim/cell_scenes.hpp"
+#include "tests/support/modbus_cell.hpp"
 
 namespace {
 
@@ -50,7 +54,7 @@ class locate_vgrd_methods : public ModbusCell, public ::testing::WithParamInterf
     const std::string image = (jobRoot_ / "template.png").string();
     EXPECT_TRUE(cv::imwrite(image, templ));
     const std::string folder = (jobRoot_ / "job").string();
-    auto p = vgr::ChildProcess::spawn({bin("vgr"), "teach", "--image", image, "--grasp",
+    auto p = vgr::test::ChildProcess::spawn({bin("vgr"), "teach", "--image", image, "--grasp",
                                                std::to_string(t.graspU) + "," + std::to_string(t.graspV), "--method",
                                                method, "--out", folder},
                                               (jobRoot_ / "teach.log").string());

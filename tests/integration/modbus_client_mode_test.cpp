@@ -3,9 +3,14 @@
 // --serve (libmodbus) or pymodbus' server under /usr/bin/python3 — holding the laser sensor
 // bit; vgrd polls it, triggers on the debounced rising edge, runs the cycle with the camera
 // emulator and writes the 30-word result block into the PLC's holding registers 100..129.
-#include <set>
+#include <unistd.h>
 
-#include "modbus_cell.hpp"
+#include <fstream>
+#include <set>
+#include <thread>
+
+#include "tests/support/modbus_cell.hpp"
+#include "tests/support/raw_tcp_client.hpp"
 
 namespace {
 
@@ -14,17 +19,7 @@ using vgr::test::ModbusCell;
 
 // A loopback port nobody listens on now (the kernel's pick), for the PLC's server, so this
 // test does not depend on the sim cell's 1503 being free on a shared machine.
-int freePort() {
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  socklen_t len = sizeof a;
-  const bool ok = ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0 &&
-                  ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len) == 0;
-  ::close(fd);
-  return ok ? ntohs(a.sin_port) : 0;
-}
+int freePort() { return vgr::test::freeLoopbackPort(); }
 
 const int kPlcPort = freePort();
 
@@ -75,7 +70,7 @@ class modbus_client_mode : public ModbusCell {
 TEST_F(modbus_client_mode, SimPlcServerPulsesTheSensorAndReceivesEveryResult) {
   ASSERT_NE(kPlcPort, 0);
   ASSERT_NO_FATAL_FAILURE(startCell(enableClient));
-  auto plc = vgr::ChildProcess::spawn({bin("vgr-sim-plc"), "--serve", "--port", std::to_string(kPlcPort),
+  auto plc = vgr::test::ChildProcess::spawn({bin("vgr-sim-plc"), "--serve", "--port", std::to_string(kPlcPort),
                                                 "--cycles", "6", "--interval-ms", "50", "--json"},
                                                (dir_ / "plc.log").string());
   ASSERT_TRUE(plc.has_value());
@@ -93,7 +88,7 @@ TEST_F(modbus_client_mode, SimPlcServerPulsesTheSensorAndReceivesEveryResult) {
 TEST_F(modbus_client_mode, AGlitchShorterThanTheDebounceTriggersNothing) {
   ASSERT_NE(kPlcPort, 0);
   ASSERT_NO_FATAL_FAILURE(startCell(enableClient));  // debounce_ms: 20
-  auto plc = vgr::ChildProcess::spawn({bin("vgr-sim-plc"), "--serve", "--port", std::to_string(kPlcPort),
+  auto plc = vgr::test::ChildProcess::spawn({bin("vgr-sim-plc"), "--serve", "--port", std::to_string(kPlcPort),
                                                 "--cycles", "1", "--pulse-ms", "4", "--timeout-ms", "1500", "--json"},
                                                (dir_ / "plc.log").string());
   ASSERT_TRUE(plc.has_value());
@@ -164,7 +159,7 @@ async def main():
 
 asyncio.run(main())
 )PY";
-  auto plc = vgr::ChildProcess::spawn({"/usr/bin/python3", script.string(), std::to_string(kPlcPort)}, plcLog.string());
+  auto plc = vgr::test::ChildProcess::spawn({"/usr/bin/python3", script.string(), std::to_string(kPlcPort)}, plcLog.string());
   ASSERT_TRUE(plc.has_value());
   ASSERT_TRUE(plc->waitForLine("listening", 10s));
   ASSERT_NO_FATAL_FAILURE(startCell(enableClient));

@@ -2,17 +2,16 @@
 // mbpoll, raw sockets sending garbage, libmodbus clients and vgr-sim-plc.
 #include "protocol/modbus_server.hpp"
 
-#include <arpa/inet.h>
-#include <netinet/in.h>
 #include <poll.h>
-#include <sys/socket.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <modbus.h>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+
+#include "tests/support/command.hpp"
+#include "tests/support/raw_tcp_client.hpp"
 
 #include <array>
 #include <atomic>
@@ -41,22 +40,9 @@ using Clock = std::chrono::steady_clock;
 // ---------------------------------------------------------------------------------------
 // Helpers
 
-struct CmdResult {
-  int exitCode = -1;
-  std::string out;
-};
-
-CmdResult runCommand(const std::string& cmd) {
-  CmdResult r;
-  FILE* p = ::popen(cmd.c_str(), "r");
-  if (p == nullptr) return r;
-  std::array<char, 4096> buf{};
-  std::size_t n = 0;
-  while ((n = std::fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
-  const int st = ::pclose(p);
-  r.exitCode = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  return r;
-}
+using test::CommandResult;
+using test::runCommand;
+using CmdResult = CommandResult;
 
 std::vector<std::string> lines(const std::string& text) {
   std::vector<std::string> out;
@@ -369,52 +355,26 @@ struct LibmodbusClient {
 };
 
 // A raw TCP socket to the server.
-struct RawSocket {
-  explicit RawSocket(std::uint16_t port) : fd(::socket(AF_INET, SOCK_STREAM, 0)) {
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_port = htons(port);
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    connected = fd >= 0 && ::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0;
-  }
-  ~RawSocket() {
-    if (fd >= 0) ::close(fd);
-  }
-  RawSocket(const RawSocket&) = delete;
-  RawSocket& operator=(const RawSocket&) = delete;
-  bool send(std::string_view bytes) const { return ::send(fd, bytes.data(), bytes.size(), MSG_NOSIGNAL) == std::ssize(bytes); }
+class RawSocket : public test::RawTcpClient {
+ public:
+  explicit RawSocket(std::uint16_t port)
+      : RawTcpClient(port, {.throwOnFailure = false}), fd(RawTcpClient::fd()), connected(RawTcpClient::connected()) {}
   // Milliseconds until the server closed the connection (reading and discarding any
   // reply), or -1 if it is still open after `timeout`.
-  long long msUntilClosed(std::chrono::milliseconds timeout) const {
+  long long msUntilClosed(std::chrono::milliseconds timeout) {
     const auto t0 = Clock::now();
-    const auto end = t0 + timeout;
-    for (;;) {
-      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(end - Clock::now()).count();
-      if (left <= 0) return -1;
-      pollfd p{fd, POLLIN, 0};
-      if (::poll(&p, 1, static_cast<int>(left)) <= 0) return -1;
-      std::array<char, 512> buf{};
-      const auto n = ::recv(fd, buf.data(), buf.size(), 0);
-      if (n <= 0) return std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - t0).count();
-    }
+    if (!waitClosed(timeout)) return -1;
+    return std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - t0).count();
   }
   // What arrives within `timeout` (one reply; stops once 100 ms pass without data).
-  std::string recvSome(std::chrono::milliseconds timeout) const {
-    std::string out;
-    const auto end = Clock::now() + timeout;
-    while (Clock::now() < end) {
-      pollfd p{fd, POLLIN, 0};
-      const int wait = out.empty() ? static_cast<int>(std::chrono::duration_cast<std::chrono::milliseconds>(end - Clock::now()).count()) : 100;
-      if (::poll(&p, 1, wait) <= 0) break;
-      std::array<char, 512> buf{};
-      const auto n = ::recv(fd, buf.data(), buf.size(), 0);
-      if (n <= 0) break;
-      out.append(buf.data(), static_cast<std::size_t>(n));
-    }
+  std::string recvSome(std::chrono::milliseconds timeout) {
+    std::string out = readOnce(512, timeout).value_or("");
+    if (out.empty()) return out;
+    while (auto more = readOnce(512, 100ms)) out += *more;
     return out;
   }
-  int fd;
-  bool connected = false;
+  const int fd;
+  const bool connected;
 };
 
 // ---------------------------------------------------------------------------------------

@@ -10,18 +10,17 @@
 //     result once per ENDPOINT name (docs/architecture.md): the clients of one endpoint
 //     share the "delivered" marker, so all clients waiting when a result arrives get it,
 //     and a client asking later waits for the next one.
-#include <arpa/inet.h>
 #include <modbus.h>
-#include <netinet/in.h>
-#include <sys/socket.h>
 
 #include <atomic>
 #include <map>
 #include <mutex>
 #include <regex>
 #include <set>
+#include <thread>
 
-#include "modbus_cell.hpp"
+#include "tests/support/modbus_cell.hpp"
+#include "tests/support/raw_tcp_client.hpp"
 
 namespace {
 
@@ -41,38 +40,22 @@ struct RobotLog {
 
 void robotLoop(bool ur, const std::atomic<bool>& stop, RobotLog& log) {
   log.endpoint = ur ? "ur" : "abb";
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in sa{};
-  sa.sin_family = AF_INET;
-  sa.sin_port = htons(ur ? 50010 : 50011);
-  sa.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  if (::connect(fd, reinterpret_cast<sockaddr*>(&sa), sizeof sa) != 0) {
+  // Reads wait up to 5 s, as the robot programs' socket timeouts.
+  vgr::test::RawTcpClient robot(ur ? 50010 : 50011, {.readTimeout = 5s, .throwOnFailure = false});
+  if (!robot.connected()) {
     log.errors++;
-    ::close(fd);
     return;
   }
-  timeval tv{5, 0};
-  ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
   const std::regex urRe(R"(\((-?\d+),(\d+)(,-?\d+\.\d{6}){6}\))");
   const std::regex abbRe(R"((-?\d+),(\d+)(,-?\d+\.\d{3}){6})");
   const std::string request = ur ? "GET,1\n" : "GET,1#";
   while (!stop) {
-    if (::send(fd, request.data(), request.size(), MSG_NOSIGNAL) != static_cast<ssize_t>(request.size())) {
+    if (!robot.send(request)) {
       log.errors++;
       break;
     }
-    std::string reply;
-    if (ur) {  // URScript reads one parenthesised tuple
-      char c;
-      while (::recv(fd, &c, 1, 0) == 1) {
-        reply += c;
-        if (c == ')') break;
-      }
-    } else {  // RAPID SocketReceive \Str: one read of at most 80 characters
-      char buf[81];
-      const auto n = ::recv(fd, buf, 80, 0);
-      if (n > 0) reply.assign(buf, static_cast<std::size_t>(n));
-    }
+    // URScript reads one parenthesised tuple; RAPID SocketReceive \Str one read of at most 80 characters.
+    const std::string reply = (ur ? robot.readUntil(')') : robot.readOnce(80)).value_or("");
     if (reply.empty()) {
       log.errors++;
       break;
@@ -92,7 +75,6 @@ void robotLoop(bool ur, const std::atomic<bool>& stop, RobotLog& log) {
     }
     log.cycles.push_back(cycle);
   }
-  ::close(fd);
 }
 
 struct PlcLog {

@@ -2,36 +2,24 @@
 // mbpoll (level handshake), pymodbus under /usr/bin/python3 (counter mode; overrun,
 // clear-error and a deadline expiry while the camera hangs), checked against the journal.
 #include <signal.h>
-#include <sys/wait.h>
 
-#include <array>
-#include <cstdio>
+#include <fstream>
 #include <regex>
 #include <set>
 #include <sstream>
+#include <thread>
 
-#include "modbus_cell.hpp"
+#include "tests/support/command.hpp"
+#include "tests/support/modbus_cell.hpp"
 
 namespace {
 
 using namespace std::chrono_literals;
 using vgr::test::ModbusCell;
 
-struct CmdResult {
-  int exitCode = -1;
-  std::string out;
-};
+using CmdResult = vgr::test::CommandResult;
 
-CmdResult run(const std::string& cmd) {
-  CmdResult r;
-  FILE* p = ::popen((cmd + " 2>&1").c_str(), "r");
-  if (p == nullptr) return r;
-  std::array<char, 4096> buf{};
-  for (std::size_t n; (n = std::fread(buf.data(), 1, buf.size(), p)) > 0;) r.out.append(buf.data(), n);
-  const int st = ::pclose(p);
-  r.exitCode = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  return r;
-}
+CmdResult run(const std::string& cmd) { return vgr::test::runCommand(cmd + " 2>&1"); }
 
 std::string mbpoll(const std::string& args) { return "mbpoll -m tcp -p 1502 -a 1 -0 " + args; }
 

@@ -11,33 +11,24 @@
 #if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #endif
-#include <arpa/inet.h>
-#include <netinet/in.h>
-#include <poll.h>
-#include <sys/socket.h>
-#include <unistd.h>
-
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <fstream>
 #include <functional>
-#include <future>
 #include <memory>
 #include <optional>
 #include <regex>
 #include <sstream>
-#include <stdexcept>
 #include <string>
-#include <thread>
 #include <vector>
 
-#include <boost/asio/executor_work_guard.hpp>
 #include <boost/asio/io_context.hpp>
-#include <boost/asio/post.hpp>
 
 #include "daemon/result_store.hpp"
 #include "protocol/robot_server.hpp"
+#include "tests/support/io_thread.hpp"
+#include "tests/support/raw_tcp_client.hpp"
 
 namespace vgr::protocol {
 namespace {
@@ -54,42 +45,15 @@ std::string example(const std::string& name) {
   return ss.str();
 }
 
-class Socket {
+// A robot program's socket; reads wait up to 3 s.
+class Socket : public test::RawTcpClient {
  public:
-  explicit Socket(std::uint16_t port) {
-    fd_ = ::socket(AF_INET, SOCK_STREAM, 0);
-    sockaddr_in addr{};
-    addr.sin_family = AF_INET;
-    addr.sin_port = htons(port);
-    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    if (::connect(fd_, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) != 0) throw std::runtime_error("connect");
-  }
-  ~Socket() { ::close(fd_); }
-  Socket(const Socket&) = delete;
-  Socket& operator=(const Socket&) = delete;
-  void send(const std::string& s) { ASSERT_EQ(::send(fd_, s.data(), s.size(), MSG_NOSIGNAL), static_cast<ssize_t>(s.size())); }
+  explicit Socket(std::uint16_t port) : RawTcpClient(port, {.readTimeout = 3000ms}) {}
+  void send(const std::string& s) { ASSERT_TRUE(RawTcpClient::send(s)); }
   // One recv of at most `max` bytes (what a single SocketReceive / read call returns).
-  std::string recvOnce(std::size_t max, std::chrono::milliseconds timeout = 3000ms) {
-    pollfd p{fd_, POLLIN, 0};
-    if (::poll(&p, 1, static_cast<int>(timeout.count())) <= 0) return {};
-    std::string buf(max, '\0');
-    const ssize_t n = ::recv(fd_, buf.data(), max, 0);
-    return n > 0 ? buf.substr(0, static_cast<std::size_t>(n)) : std::string();
-  }
-  // Byte by byte up to and including `stop` (or `limit` bytes).
-  std::string recvUntil(char stop, std::size_t limit) {
-    std::string out;
-    while (out.size() < limit) {
-      const std::string c = recvOnce(1);
-      if (c.empty()) break;
-      out += c;
-      if (c[0] == stop) break;
-    }
-    return out;
-  }
-
- private:
-  int fd_ = -1;
+  std::string recvOnce(std::size_t max) { return readOnce(max).value_or(""); }
+  // Up to and including `stop` (or `limit` bytes).
+  std::string recvUntil(char stop, std::size_t limit) { return readUntil(stop, kDefault, limit).value_or(""); }
 };
 
 // ---- RAPID -------------------------------------------------------------------------------
@@ -189,24 +153,15 @@ class robot_languages : public ::testing::Test {
       }));
       ASSERT_TRUE(servers_.back()->start());
     }
-    thread_ = std::thread([this] { io_.run(); });
+    ioThread_.start();
   }
   void TearDown() override {
     onIo([this] {
       for (auto& s : servers_) s->stop();
     });
-    work_.reset();
-    io_.stop();
-    thread_.join();
+    ioThread_.stop();
   }
-  void onIo(const std::function<void()>& f) {
-    std::promise<void> done;
-    asio::post(io_, [&] {
-      f();
-      done.set_value();
-    });
-    done.get_future().wait();
-  }
+  void onIo(const std::function<void()>& f) { ioThread_.run(f); }
   std::uint16_t port(Dialect d) { return servers_[static_cast<std::size_t>(d == Dialect::Abb ? 0 : d == Dialect::Fanuc ? 1 : d == Dialect::Ur ? 2 : 3)]->port(); }
 
   // A pose at the edge of what the wire carries, with a tilt, and a large cycle id.
@@ -221,11 +176,10 @@ class robot_languages : public ::testing::Test {
     onIo([&] { store_->onResult(r); });
   }
 
-  asio::io_context io_;
-  asio::executor_work_guard<asio::io_context::executor_type> work_ = asio::make_work_guard(io_);
+  vgr::test::IoThread ioThread_;
+  asio::io_context& io_ = ioThread_.io();
   std::unique_ptr<daemon::ResultStore> store_;
   std::vector<std::unique_ptr<RobotServer>> servers_;
-  std::thread thread_;
 };
 
 // R = Rz(rz) Ry(ry) Rx(rx) as a unit quaternion (w, x, y, z), written out.

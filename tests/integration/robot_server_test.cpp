@@ -8,12 +8,6 @@
 #endif
 #include "protocol/robot_server.hpp"
 
-#include <arpa/inet.h>
-#include <netinet/in.h>
-#include <netinet/tcp.h>
-#include <poll.h>
-#include <sys/socket.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <gtest/gtest.h>
@@ -23,7 +17,6 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
-#include <future>
 #include <memory>
 #include <optional>
 #include <regex>
@@ -33,11 +26,13 @@
 #include <vector>
 
 #include <fmt/core.h>
-#include <boost/asio/executor_work_guard.hpp>
 #include <boost/asio/io_context.hpp>
-#include <boost/asio/post.hpp>
 #include <boost/asio/steady_timer.hpp>
 #include <nlohmann/json.hpp>
+
+#include "tests/support/command.hpp"
+#include "tests/support/io_thread.hpp"
+#include "tests/support/raw_tcp_client.hpp"
 
 namespace vgr::protocol {
 namespace {
@@ -70,125 +65,7 @@ RobotEndpoint endpoint(std::string name, Dialect dialect, std::string bind, std:
   return ep;
 }
 
-// A blocking TCP client with timeouts, like a robot program's socket.
-class RawClient {
- public:
-  explicit RawClient(std::uint16_t port, const char* from = nullptr) {
-    fd_ = ::socket(AF_INET, SOCK_STREAM, 0);
-    if (fd_ < 0) throw std::runtime_error("socket() failed");
-    if (from != nullptr) {  // another loopback address (all of 127/8 is local on Linux)
-      sockaddr_in src{};
-      src.sin_family = AF_INET;
-      ::inet_pton(AF_INET, from, &src.sin_addr);
-      if (::bind(fd_, reinterpret_cast<const sockaddr*>(&src), sizeof src) != 0) {
-        ::close(fd_);
-        throw std::runtime_error("bind() failed");
-      }
-    }
-    sockaddr_in addr{};
-    addr.sin_family = AF_INET;
-    addr.sin_port = htons(port);
-    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    if (::connect(fd_, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) != 0) {
-      ::close(fd_);
-      throw std::runtime_error("connect() failed");
-    }
-  }
-  ~RawClient() {
-    if (fd_ >= 0) ::close(fd_);
-  }
-  RawClient(const RawClient&) = delete;
-  RawClient& operator=(const RawClient&) = delete;
-
-  bool send(std::string_view bytes) {
-    while (!bytes.empty()) {
-      const ssize_t n = ::send(fd_, bytes.data(), bytes.size(), MSG_NOSIGNAL);
-      if (n <= 0) return false;
-      bytes.remove_prefix(static_cast<std::size_t>(n));
-    }
-    return true;
-  }
-
-  // URScript style: everything up to and including `stop`, or nullopt on timeout/close.
-  std::optional<std::string> readUntil(char stop, std::chrono::milliseconds timeout = 2000ms) {
-    const auto deadline = Clock::now() + timeout;
-    for (;;) {
-      const std::size_t pos = pending_.find(stop);
-      if (pos != std::string::npos) {
-        std::string out = pending_.substr(0, pos + 1);
-        pending_.erase(0, pos + 1);
-        return out;
-      }
-      if (!fill(deadline)) return std::nullopt;
-    }
-  }
-
-  // RAPID SocketReceive \Str style: what one recv returns, at most `max` bytes.
-  std::optional<std::string> readOnce(std::size_t max = 80, std::chrono::milliseconds timeout = 2000ms) {
-    if (pending_.empty() && !fill(Clock::now() + timeout, max)) return std::nullopt;
-    std::string out = pending_.substr(0, max);
-    pending_.erase(0, out.size());
-    return out;
-  }
-
-  // Exactly n bytes (for merged replies), or nullopt.
-  std::optional<std::string> readExactly(std::size_t n, std::chrono::milliseconds timeout = 2000ms) {
-    const auto deadline = Clock::now() + timeout;
-    while (pending_.size() < n) {
-      if (!fill(deadline)) return std::nullopt;
-    }
-    std::string out = pending_.substr(0, n);
-    pending_.erase(0, n);
-    return out;
-  }
-
-  // True when nothing (not even a close) arrives for `period`.
-  bool quiet(std::chrono::milliseconds period = 100ms) {
-    if (!pending_.empty()) return false;
-    pollfd p{fd_, POLLIN, 0};
-    return ::poll(&p, 1, static_cast<int>(period.count())) == 0;
-  }
-
-  // True when the server closes the connection within `timeout` (data before it is dropped).
-  bool waitClosed(std::chrono::milliseconds timeout = 2000ms) {
-    const auto deadline = Clock::now() + timeout;
-    for (;;) {
-      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
-      if (left.count() <= 0) return false;
-      pollfd p{fd_, POLLIN, 0};
-      if (::poll(&p, 1, static_cast<int>(left.count())) <= 0) continue;
-      char buf[256];
-      const ssize_t n = ::recv(fd_, buf, sizeof buf, 0);
-      if (n <= 0) return true;
-    }
-  }
-
-  void shutdownWrite() { ::shutdown(fd_, SHUT_WR); }
-
-  // Abortive close (RST), like a robot controller losing power mid-exchange.
-  void reset() {
-    linger l{1, 0};
-    ::setsockopt(fd_, SOL_SOCKET, SO_LINGER, &l, sizeof l);
-    ::close(fd_);
-    fd_ = -1;
-  }
-
- private:
-  bool fill(Clock::time_point deadline, std::size_t max = 4096) {
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
-    if (left.count() <= 0) return false;
-    pollfd p{fd_, POLLIN, 0};
-    if (::poll(&p, 1, static_cast<int>(left.count())) <= 0) return false;
-    std::string buf(max, '\0');
-    const ssize_t n = ::recv(fd_, buf.data(), buf.size(), 0);
-    if (n <= 0) return false;
-    pending_.append(buf.data(), static_cast<std::size_t>(n));
-    return true;
-  }
-
-  int fd_ = -1;
-  std::string pending_;
-};
+using test::RawTcpClient;
 
 class RobotServerFixture : public ::testing::Test {
  protected:
@@ -199,7 +76,7 @@ class RobotServerFixture : public ::testing::Test {
     ASSERT_TRUE(abb_->start());
     ASSERT_NE(ur_->port(), 0);
     ASSERT_NE(abb_->port(), 0);
-    thread_ = std::thread([this] { io_.run(); });
+    ioThread_.start();
   }
 
   void TearDown() override {
@@ -208,23 +85,14 @@ class RobotServerFixture : public ::testing::Test {
       ur_->stop();
       abb_->stop();
     });
-    work_.reset();
-    io_.stop();
-    thread_.join();
+    ioThread_.stop();
     extra_.clear();
     ur_.reset();
     abb_.reset();
   }
 
   // Runs f on the I/O thread and waits for it.
-  void onIo(const std::function<void()>& f) {
-    std::promise<void> done;
-    asio::post(io_, [&] {
-      f();
-      done.set_value();
-    });
-    done.get_future().wait();
-  }
+  void onIo(const std::function<void()>& f) { ioThread_.run(f); }
 
   std::size_t clients(RobotServer& s) {
     std::size_t n = 0;
@@ -269,11 +137,10 @@ class RobotServerFixture : public ::testing::Test {
     };
   }
 
-  asio::io_context io_;
-  asio::executor_work_guard<asio::io_context::executor_type> work_ = asio::make_work_guard(io_);
+  vgr::test::IoThread ioThread_;
+  asio::io_context& io_ = ioThread_.io();
   std::unique_ptr<RobotServer> ur_, abb_;
   std::vector<std::unique_ptr<RobotServer>> extra_;
-  std::thread thread_;
   std::atomic<int> requests_{0};
   std::string lastRobot_;  // written on the I/O thread, read after a reply arrived
 };
@@ -281,7 +148,7 @@ class RobotServerFixture : public ::testing::Test {
 using robot_server = RobotServerFixture;
 
 TEST_F(robot_server, UrReplyIsExactlyTheParenthesisedValues) {
-  RawClient c(ur_->port());
+  RawTcpClient c(ur_->port());
   ASSERT_TRUE(c.send("GET,1\n"));  // socket_send_line
   const auto reply = c.readUntil(')');
   ASSERT_TRUE(reply);
@@ -292,7 +159,7 @@ TEST_F(robot_server, UrReplyIsExactlyTheParenthesisedValues) {
 }
 
 TEST_F(robot_server, AbbReplyFitsOneSocketReceive) {
-  RawClient c(abb_->port());
+  RawTcpClient c(abb_->port());
   ASSERT_TRUE(c.send("GET,1#"));
   const auto reply = c.readOnce(80);
   ASSERT_TRUE(reply);
@@ -304,7 +171,7 @@ TEST_F(robot_server, AbbReplyFitsOneSocketReceive) {
 }
 
 TEST_F(robot_server, AllTerminatorsAccepted) {
-  RawClient c(abb_->port());
+  RawTcpClient c(abb_->port());
   for (const char* req : {"GET,1#", "GET,1\r", "GET,1\n", "GET,1\r\n"}) {
     ASSERT_TRUE(c.send(req));
     const auto reply = c.readOnce(80);
@@ -315,7 +182,7 @@ TEST_F(robot_server, AllTerminatorsAccepted) {
 }
 
 TEST_F(robot_server, DelayedReplyFromTimer) {
-  RawClient c(ur_->port());
+  RawTcpClient c(ur_->port());
   const auto t0 = Clock::now();
   ASSERT_TRUE(c.send("GET,2\n"));
   const auto reply = c.readUntil(')');
@@ -329,7 +196,7 @@ TEST_F(robot_server, DelayedReplyFromTimer) {
 }
 
 TEST_F(robot_server, GarbageGetsMinusOneAndTheConnectionStaysUsable) {
-  RawClient c(ur_->port());
+  RawTcpClient c(ur_->port());
   ASSERT_TRUE(c.send("HELLO\n"));
   EXPECT_EQ(c.readUntil(')'), urStatus(-1));
   ASSERT_TRUE(c.send("GET,1\n"));
@@ -349,7 +216,7 @@ TEST_F(robot_server, GarbageGetsMinusOneAndTheConnectionStaysUsable) {
 }
 
 TEST_F(robot_server, AbbGarbageAndBadArguments) {
-  RawClient c(abb_->port());
+  RawTcpClient c(abb_->port());
   ASSERT_TRUE(c.send("HELLO#"));
   EXPECT_EQ(c.readOnce(80), abbStatus(-1));
   ASSERT_TRUE(c.send("GET,0#"));
@@ -363,7 +230,7 @@ TEST_F(robot_server, AbbGarbageAndBadArguments) {
 }
 
 TEST_F(robot_server, PipelinedRequestsAreAnsweredInOrder) {
-  RawClient c(ur_->port());
+  RawTcpClient c(ur_->port());
   // The slow request first: its reply must still come first; the garbage's -1 waits its turn.
   ASSERT_TRUE(c.send("GET,2\nHELLO\nGET,1\n"));
   EXPECT_EQ(c.readUntil(')'), urOk(2));
@@ -372,7 +239,7 @@ TEST_F(robot_server, PipelinedRequestsAreAnsweredInOrder) {
   EXPECT_TRUE(c.quiet());
 
   // Merged ABB requests (two quick SocketSends): two replies, back to back.
-  RawClient a(abb_->port());
+  RawTcpClient a(abb_->port());
   ASSERT_TRUE(a.send("GET,1#GET,1#"));
   EXPECT_EQ(a.readExactly(2 * abbOk(1).size()), abbOk(1) + abbOk(1));
   EXPECT_TRUE(a.quiet());
@@ -381,7 +248,7 @@ TEST_F(robot_server, PipelinedRequestsAreAnsweredInOrder) {
 TEST_F(robot_server, ManyQueuedRequestsAllAnswered) {
   // More than the per-connection queue holds: the server stops reading, TCP holds the
   // rest back, and every request is still answered once, in order.
-  RawClient c(ur_->port());
+  RawTcpClient c(ur_->port());
   std::string burst;
   for (int i = 0; i < 100; ++i) burst += (i % 10 == 0) ? "GET,2\n" : "GET,1\n";
   ASSERT_TRUE(c.send(burst));
@@ -395,8 +262,8 @@ TEST_F(robot_server, ManyQueuedRequestsAllAnswered) {
 }
 
 TEST_F(robot_server, SecondClientUnaffectedByFirstClientsGarbage) {
-  RawClient bad(ur_->port());
-  RawClient good(ur_->port());
+  RawTcpClient bad(ur_->port());
+  RawTcpClient good(ur_->port());
   // The bad client streams an endless line (the server is discarding it)...
   for (int i = 0; i < 8; ++i) ASSERT_TRUE(bad.send(std::string(1024, 'Q')));
   // ...and the good one is served immediately, also while the bad one has a slow request pending.
@@ -413,20 +280,20 @@ TEST_F(robot_server, SecondClientUnaffectedByFirstClientsGarbage) {
 
 TEST_F(robot_server, ClientVanishingMidRequestIsHarmless) {
   {
-    RawClient gone(ur_->port());
+    RawTcpClient gone(ur_->port());
     ASSERT_TRUE(gone.send("GET,7\n"));  // handler replies 300 ms later, after the close
   }
   {
-    RawClient reset(ur_->port());
+    RawTcpClient reset(ur_->port());
     ASSERT_TRUE(reset.send("GET,2\n"));
     std::this_thread::sleep_for(10ms);
     reset.reset();  // RST
   }
   {
-    RawClient partial(ur_->port());
+    RawTcpClient partial(ur_->port());
     ASSERT_TRUE(partial.send("GET,"));
   }
-  RawClient c(ur_->port());
+  RawTcpClient c(ur_->port());
   ASSERT_TRUE(c.send("GET,1\n"));
   EXPECT_EQ(c.readUntil(')'), urOk(1));
   std::this_thread::sleep_for(400ms);  // the late replies fire into closed connections
@@ -436,7 +303,7 @@ TEST_F(robot_server, ClientVanishingMidRequestIsHarmless) {
 }
 
 TEST_F(robot_server, HalfClosedClientStillGetsItsReply) {
-  RawClient c(abb_->port());
+  RawTcpClient c(abb_->port());
   ASSERT_TRUE(c.send("GET,2#"));
   c.shutdownWrite();
   EXPECT_EQ(c.readOnce(80), abbOk(2));
@@ -444,7 +311,7 @@ TEST_F(robot_server, HalfClosedClientStillGetsItsReply) {
 }
 
 TEST_F(robot_server, HandlerBugsAnswerInternal) {
-  RawClient c(ur_->port());
+  RawTcpClient c(ur_->port());
   ASSERT_TRUE(c.send("GET,3\n"));  // handler drops the ReplyFn
   EXPECT_EQ(c.readUntil(')'), "(-8,0,0.000000,0.000000,0.000000,0.000000,0.000000,0.000000)");
   ASSERT_TRUE(c.send("GET,4\n"));  // handler throws
@@ -457,7 +324,7 @@ TEST_F(robot_server, HandlerBugsAnswerInternal) {
 }
 
 TEST_F(robot_server, IdleConnectionIsKept) {
-  RawClient c(abb_->port());
+  RawTcpClient c(abb_->port());
   ASSERT_TRUE(c.send("GET,1#"));
   EXPECT_EQ(c.readOnce(80), abbOk(1));
   EXPECT_TRUE(c.quiet(1500ms));  // no idle timeout closes it
@@ -474,17 +341,17 @@ TEST_F(robot_server, MaxClientsReplacesTheSameRobotsStaleConnectionAndRefusesOth
     port = extra_.back()->port();
   });
   ASSERT_NE(port, 0);
-  RawClient first(port);
+  RawTcpClient first(port);
   ASSERT_TRUE(first.send("GET,1\n"));
   EXPECT_EQ(first.readUntil(')'), urOk(1));
   // Another address while full: refused, the robot's connection stays.
-  RawClient stranger(port, "127.0.0.2");
+  RawTcpClient stranger(port, {.from = "127.0.0.2"});
   EXPECT_TRUE(stranger.waitClosed());
   ASSERT_TRUE(first.send("GET,1\n"));
   EXPECT_EQ(first.readUntil(')'), urOk(1));
   // The same robot (address) again, e.g. after its controller rebooted: the new
   // connection replaces the stale one.
-  RawClient second(port);
+  RawTcpClient second(port);
   EXPECT_TRUE(first.waitClosed());
   ASSERT_TRUE(second.send("GET,1\n"));
   EXPECT_EQ(second.readUntil(')'), urOk(1));
@@ -500,9 +367,9 @@ TEST_F(robot_server, AllowedClientsOnly) {
     ASSERT_TRUE(extra_.back()->start());
     port = extra_.back()->port();
   });
-  RawClient denied(port);  // from 127.0.0.1
+  RawTcpClient denied(port);  // from 127.0.0.1
   EXPECT_TRUE(denied.waitClosed());
-  RawClient allowed(port, "127.0.0.3");
+  RawTcpClient allowed(port, {.from = "127.0.0.3"});
   ASSERT_TRUE(allowed.send("GET,1#"));
   EXPECT_EQ(allowed.readOnce(80), abbOk(1));
 
@@ -521,16 +388,11 @@ TEST_F(robot_server, AllowedClientsOnly) {
 TEST_F(robot_server, KeepaliveIsOnForEveryConnection) {
   // The kernel's view of the server side of the connection (iproute2's ss): a keepalive
   // timer runs on it, armed for the 10 s idle time of docs/protocols.md.
-  RawClient c(ur_->port());
+  RawTcpClient c(ur_->port());
   ASSERT_TRUE(c.send("GET,1\n"));
   EXPECT_EQ(c.readUntil(')'), urOk(1));
   const std::string cmd = fmt::format("ss -tnoH state established '( sport = :{} )' 2>&1", ur_->port());
-  FILE* p = ::popen(cmd.c_str(), "r");
-  ASSERT_NE(p, nullptr);
-  std::string out;
-  char buf[512];
-  while (std::fgets(buf, sizeof buf, p)) out += buf;
-  ::pclose(p);
+  const std::string out = test::runCommand(cmd).out;
   std::smatch m;
   // iproute2 6.1 prints the time left as "9.988ms" for 9.988 s (checked against
   // TCP_KEEPIDLE = 10 s right after connecting); older versions print "9.988sec". Read the
@@ -558,7 +420,7 @@ TEST_F(robot_server, StartFailureNamesEndpointAddressAndPort) {
 }
 
 TEST_F(robot_server, StopClosesSessions) {
-  RawClient c(ur_->port());
+  RawTcpClient c(ur_->port());
   ASSERT_TRUE(c.send("GET,1\n"));
   EXPECT_EQ(c.readUntil(')'), urOk(1));
   ASSERT_TRUE(c.send("GET,7\n"));  // pending when the server stops: dropped, no crash
@@ -566,7 +428,7 @@ TEST_F(robot_server, StopClosesSessions) {
   onIo([&] { ur_->stop(); });
   EXPECT_TRUE(c.waitClosed());
   std::this_thread::sleep_for(350ms);                              // the handler's late reply lands on a stopped server
-  EXPECT_THROW(RawClient again(ur_->port()), std::runtime_error);  // nothing listens any more
+  EXPECT_THROW(RawTcpClient again(ur_->port()), std::runtime_error);  // nothing listens any more
 }
 
 // The robot simulator against the real server: its strict validation accepts what the
@@ -579,14 +441,9 @@ struct SimRun {
 SimRun runSim(const std::string& args) {
   SimRun run;
   const std::string cmd = fmt::format("{}/vgr-sim-robot {} --json 2>/dev/null", VGR_BIN_DIR, args);
-  FILE* pipe = ::popen(cmd.c_str(), "r");
-  if (pipe == nullptr) return run;
-  std::string out;
-  char buf[4096];
-  std::size_t n = 0;
-  while ((n = std::fread(buf, 1, sizeof buf, pipe)) > 0) out.append(buf, n);
-  const int status = ::pclose(pipe);
-  run.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  const auto ran = test::runCommand(cmd);
+  const std::string& out = ran.out;
+  run.exitCode = ran.exitCode;
   std::size_t pos = 0;
   while (pos < out.size()) {
     const std::size_t eol = out.find('\n', pos);

@@ -2,31 +2,23 @@
 // on one I/O thread (as in vgrd), raw TCP clients on loopback checking the exact bytes.
 // fanuc and binary request/reply, JOB switching over the socket, multi-part serving, and
 // the strict dialect's paper-002 exchange with each way it can go wrong.
-#include <arpa/inet.h>
-#include <netinet/in.h>
-#include <poll.h>
-#include <sys/socket.h>
-#include <unistd.h>
-
 #include <gtest/gtest.h>
 
 #include <chrono>
 #include <functional>
-#include <future>
 #include <memory>
 #include <mutex>
 #include <optional>
-#include <stdexcept>
 #include <string>
 #include <thread>
 #include <vector>
 
-#include <boost/asio/executor_work_guard.hpp>
 #include <boost/asio/io_context.hpp>
-#include <boost/asio/post.hpp>
 
 #include "daemon/result_store.hpp"
 #include "protocol/robot_server.hpp"
+#include "tests/support/io_thread.hpp"
+#include "tests/support/raw_tcp_client.hpp"
 
 namespace vgr::protocol {
 namespace {
@@ -40,71 +32,12 @@ using daemon::RobotPolicy;
 
 constexpr double kPi = 3.14159265358979323846;
 
-class RawClient {
+// The robots' clients here read with a 3 s deadline.
+class RawClient : public test::RawTcpClient {
  public:
-  explicit RawClient(std::uint16_t port) {
-    fd_ = ::socket(AF_INET, SOCK_STREAM, 0);
-    sockaddr_in addr{};
-    addr.sin_family = AF_INET;
-    addr.sin_port = htons(port);
-    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    if (::connect(fd_, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) != 0) {
-      ::close(fd_);
-      throw std::runtime_error("connect() failed");
-    }
-  }
-  ~RawClient() {
-    if (fd_ >= 0) ::close(fd_);
-  }
-  RawClient(const RawClient&) = delete;
-  RawClient& operator=(const RawClient&) = delete;
-
-  bool send(std::string_view bytes) {
-    return ::send(fd_, bytes.data(), bytes.size(), MSG_NOSIGNAL) == static_cast<ssize_t>(bytes.size());
-  }
+  explicit RawClient(std::uint16_t port) : RawTcpClient(port, {.readTimeout = 3000ms}) {}
   // Exactly n bytes, or what came before the timeout / close.
-  std::string readExactly(std::size_t n, std::chrono::milliseconds timeout = 3000ms) {
-    const auto deadline = Clock::now() + timeout;
-    while (pending_.size() < n && fill(deadline)) {
-    }
-    std::string out = pending_.substr(0, n);
-    pending_.erase(0, out.size());
-    return out;
-  }
-  bool quiet(std::chrono::milliseconds period = 100ms) {
-    if (!pending_.empty()) return false;
-    pollfd p{fd_, POLLIN, 0};
-    return ::poll(&p, 1, static_cast<int>(period.count())) == 0;
-  }
-  bool waitClosed(std::chrono::milliseconds timeout = 3000ms) {
-    const auto deadline = Clock::now() + timeout;
-    while (Clock::now() < deadline) {
-      pollfd p{fd_, POLLIN, 0};
-      if (::poll(&p, 1, 50) <= 0) continue;
-      char buf[256];
-      if (::recv(fd_, buf, sizeof buf, 0) <= 0) return true;
-    }
-    return false;
-  }
-  void close() {
-    ::close(fd_);
-    fd_ = -1;
-  }
-
- private:
-  bool fill(Clock::time_point deadline) {
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
-    if (left.count() <= 0) return false;
-    pollfd p{fd_, POLLIN, 0};
-    if (::poll(&p, 1, static_cast<int>(left.count())) <= 0) return false;
-    char buf[4096];
-    const ssize_t n = ::recv(fd_, buf, sizeof buf, 0);
-    if (n <= 0) return false;
-    pending_.append(buf, static_cast<std::size_t>(n));
-    return true;
-  }
-  int fd_ = -1;
-  std::string pending_;
+  std::string readExactly(std::size_t n) { return readBytes(n); }
 };
 
 PartResult part(double x, double y, double rzDeg, double score, int label) {
@@ -119,26 +52,17 @@ class robot_wire : public ::testing::Test {
  protected:
   void SetUp() override {
     store_ = std::make_unique<ResultStore>(io_, std::set<int>{1, 2});
-    thread_ = std::thread([this] { io_.run(); });
+    ioThread_.start();
   }
   void TearDown() override {
     onIo([this] {
       for (auto& s : servers_) s->stop();
     });
-    work_.reset();
-    io_.stop();
-    thread_.join();
+    ioThread_.stop();
     servers_.clear();
     store_.reset();
   }
-  void onIo(const std::function<void()>& f) {
-    std::promise<void> done;
-    asio::post(io_, [&] {
-      f();
-      done.set_value();
-    });
-    done.get_future().wait();
-  }
+  void onIo(const std::function<void()>& f) { ioThread_.run(f); }
 
   std::uint16_t serve(RobotEndpoint ep, RobotPolicy policy = RobotPolicy{1, 300, PartOrder::BestScore, 0}) {
     std::uint16_t port = 0;
@@ -193,11 +117,10 @@ class robot_wire : public ::testing::Test {
     return ep;
   }
 
-  asio::io_context io_;
-  asio::executor_work_guard<asio::io_context::executor_type> work_ = asio::make_work_guard(io_);
+  vgr::test::IoThread ioThread_;
+  asio::io_context& io_ = ioThread_.io();
   std::unique_ptr<ResultStore> store_;
   std::vector<std::unique_ptr<RobotServer>> servers_;
-  std::thread thread_;
   std::mutex mu_;
   std::vector<std::pair<std::string, StrictOutcome>> outcomes_;
 };

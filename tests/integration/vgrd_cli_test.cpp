@@ -1,9 +1,7 @@
 // vgrd's command line as an operator meets it: --check on good and broken configs, and a
 // clear one-line error for a port that is already taken.
-#include <sys/wait.h>
 
 #include <algorithm>
-#include <cstdio>
 #include <unistd.h>
 #include <filesystem>
 #include <fstream>
@@ -12,26 +10,15 @@
 #include <gtest/gtest.h>
 
 #include "config/cell_config.hpp"
+#include "tests/support/command.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 
-struct CmdRun {
-  int exitCode = -1;
-  std::string out;  // stdout + stderr
-};
+using CmdRun = vgr::test::CommandResult;  // out: stdout + stderr
 
-CmdRun run(const std::string& cmd) {
-  CmdRun r;
-  FILE* p = ::popen((cmd + " 2>&1").c_str(), "r");
-  if (!p) return r;
-  char buf[512];
-  while (std::fgets(buf, sizeof buf, p)) r.out += buf;
-  const int st = ::pclose(p);
-  r.exitCode = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  return r;
-}
+CmdRun run(const std::string& cmd) { return vgr::test::runCommand(cmd + " 2>&1"); }
 
 std::string writeConfig(const std::string& name, const std::string& text) {
   const fs::path path = fs::temp_directory_path() / ("vgr-cli-" + std::to_string(::getpid()) + "-" + name);

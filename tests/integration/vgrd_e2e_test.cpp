@@ -2,17 +2,11 @@
 // through Aravis), vgrd on the example cell config, and real peers — pymodbus
 // (/usr/bin/python3) and libmodbus as PLCs, raw TCP sockets as robots — with every pose
 // checked against the renderer's ground truth.
-#include <arpa/inet.h>
 #include <modbus.h>
-#include <netinet/in.h>
-#include <sys/socket.h>
-#include <sys/un.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <cstring>
 #include <cstdio>
-#include <filesystem>
 #include <fstream>
 #include <regex>
 #include <string>
@@ -21,140 +15,33 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "config/cell_config.hpp"
-#include "core/child_process.hpp"
 #include "sim/scene.hpp"
+#include "tests/support/command.hpp"
+#include "tests/support/raw_tcp_client.hpp"
+#include "tests/support/sim_cell.hpp"
 
 namespace {
 
-namespace fs = std::filesystem;
 using std::chrono::milliseconds;
-using vgr::ChildProcess;
-using Clock = std::chrono::steady_clock;
+using vgr::test::RawTcpClient;
 
-constexpr int kModbusPort = 1502, kUrPort = 50010, kAbbPort = 50011, kFanucPort = 50012;
-
-std::string bin(const std::string& name) { return std::string(VGR_BIN_DIR) + "/" + name; }
-
-// ---- a raw TCP robot client ------------------------------------------------------------
-class RawClient {
+// A raw TCP robot client; reads wait up to 5 s.
+class RawClient : public RawTcpClient {
  public:
-  explicit RawClient(int port) {
-    fd_ = ::socket(AF_INET, SOCK_STREAM, 0);
-    sockaddr_in sa{};
-    sa.sin_family = AF_INET;
-    sa.sin_port = htons(static_cast<std::uint16_t>(port));
-    sa.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    connected_ = ::connect(fd_, reinterpret_cast<sockaddr*>(&sa), sizeof sa) == 0;
-    timeval tv{5, 0};
-    ::setsockopt(fd_, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
-  }
-  ~RawClient() { ::close(fd_); }
-  bool connected() const { return connected_; }
-  void send(const std::string& s) { ASSERT_EQ(::send(fd_, s.data(), s.size(), MSG_NOSIGNAL), static_cast<ssize_t>(s.size())); }
+  explicit RawClient(int port)
+      : RawTcpClient(static_cast<std::uint16_t>(port), {.readTimeout = milliseconds(5000), .throwOnFailure = false}) {}
+  void send(const std::string& s) { ASSERT_TRUE(RawTcpClient::send(s)); }
   // One read, as RAPID's SocketReceive \Str does (at most 80 characters for ABB).
-  std::string readOnce(std::size_t max = 1024) {
-    std::string buf(max, '\0');
-    const ssize_t n = ::recv(fd_, buf.data(), max, 0);
-    return n > 0 ? buf.substr(0, static_cast<std::size_t>(n)) : std::string();
-  }
+  std::string readOnce(std::size_t max = 1024) { return RawTcpClient::readOnce(max).value_or(""); }
   // Until ')' (URScript's socket_read_ascii_float reads one parenthesised tuple).
-  std::string readTuple() {
-    std::string out;
-    char c;
-    while (::recv(fd_, &c, 1, 0) == 1) {
-      out += c;
-      if (c == ')') break;
-    }
-    return out;
-  }
-
- private:
-  int fd_ = -1;
-  bool connected_ = false;
+  std::string readTuple() { return readUntil(')').value_or(""); }
 };
 
 // ---- the cell --------------------------------------------------------------------------
-class Cell : public ::testing::Test {
+class Cell : public vgr::test::SimCell {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("vgr-e2e-" + std::to_string(::getpid()) + "-" + std::to_string(counter_++));
-    fs::create_directories(dir_);
-    auto cfg = vgr::config::parseCellConfig(vgr::config::embeddedSimCellYaml(), "embedded");
-    ASSERT_TRUE(cfg.has_value());
-    cfg_ = *cfg;
-    configPath_ = *vgr::config::writeSimCell(dir_.string());  // + its calibration files
-    startCamera();
-    startVgrd();
-  }
-  void TearDown() override {
-    vgrd_.reset();
-    camera_.reset();
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
-  }
+  void SetUp() override { ASSERT_NO_FATAL_FAILURE(startCell()); }
 
-  void startCamera() {
-    auto p = ChildProcess::spawn({bin("vgr-sim-camera"), "--config", configPath_}, (dir_ / "camera.log").string());
-    ASSERT_TRUE(p.has_value());
-    ASSERT_TRUE(p->waitForLine("\"ready\"", milliseconds(5000)));
-    camera_ = std::make_unique<ChildProcess>(std::move(*p));
-  }
-
-  // vgrd with a NOTIFY_SOCKET of our own: READY=1 must arrive as systemd would get it.
-  void startVgrd() {
-    const std::string sock = (dir_ / "notify.sock").string();
-    notifyFd_ = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
-    sockaddr_un sa{};
-    sa.sun_family = AF_UNIX;
-    std::snprintf(sa.sun_path, sizeof sa.sun_path, "%s", sock.c_str());
-    ASSERT_EQ(::bind(notifyFd_, reinterpret_cast<sockaddr*>(&sa), sizeof sa), 0);
-    ::setenv("NOTIFY_SOCKET", sock.c_str(), 1);
-    auto p = ChildProcess::spawn({bin("vgrd"), "--config", configPath_, "--journal", journalPath()}, (dir_ / "vgrd.log").string());
-    ::unsetenv("NOTIFY_SOCKET");
-    ASSERT_TRUE(p.has_value());
-    vgrd_ = std::make_unique<ChildProcess>(std::move(*p));
-    ASSERT_TRUE(waitNotify("READY=1", milliseconds(15000))) << log("vgrd.log");
-  }
-
-  bool waitNotify(const std::string& what, milliseconds timeout) {
-    const auto deadline = Clock::now() + timeout;
-    timeval tv{0, 100000};
-    ::setsockopt(notifyFd_, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
-    while (Clock::now() < deadline) {
-      char buf[512];
-      const ssize_t n = ::recv(notifyFd_, buf, sizeof buf, 0);
-      if (n > 0 && std::string(buf, static_cast<std::size_t>(n)).find(what) != std::string::npos) return true;
-    }
-    return false;
-  }
-
-  std::string journalPath() const { return (dir_ / "journal.jsonl").string(); }
-  std::string log(const std::string& name) const {
-    std::ifstream in(dir_ / name);
-    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  }
-  std::vector<nlohmann::json> journal() const {
-    std::vector<nlohmann::json> out;
-    std::ifstream in(journalPath());
-    std::string line;
-    while (std::getline(in, line)) {
-      // A line being written right now may be incomplete: only that one can fail to parse.
-      auto j = nlohmann::json::parse(line, nullptr, false);
-      if (!j.is_discarded()) out.push_back(std::move(j));
-    }
-    return out;
-  }
-  // The journal is written after the PLC and robots were served: give it a moment.
-  nlohmann::json journalEntry(std::uint32_t cycle) const {
-    const auto deadline = Clock::now() + milliseconds(2000);
-    do {
-      for (const auto& j : journal())
-        if (j.at("cycle").get<std::uint32_t>() == cycle) return j;
-      std::this_thread::sleep_for(milliseconds(10));
-    } while (Clock::now() < deadline);
-    return {};
-  }
   vgr::sim::SceneTruth truthFor(std::uint64_t frameId) const {
     return vgr::sim::SceneRenderer::fromCellConfig(cfg_).truthForFrame(frameId);
   }
@@ -210,12 +97,6 @@ class Cell : public ::testing::Test {
     return ctx;
   }
 
-  static inline int counter_ = 0;
-  fs::path dir_;
-  std::string configPath_;
-  vgr::config::CellConfig cfg_;
-  std::unique_ptr<ChildProcess> camera_, vgrd_;
-  int notifyFd_ = -1;
 };
 
 double angleDiff(double a, double b) { return std::abs(std::remainder(a - b, 360.0)); }
@@ -245,12 +126,9 @@ print(json.dumps({"status": r[0], "error": r[1], "acq": r[2], "result_id": r[3],
                   "x": vals[0], "y": vals[1], "z": vals[2], "r1": vals[3], "r2": vals[4], "r3": vals[5], "score": vals[6]}))
 )PY";
   for (int i = 0; i < 3; ++i) {
-    FILE* p = ::popen(("/usr/bin/python3 " + script + " " + std::to_string(kModbusPort) + " 2>&1").c_str(), "r");
-    ASSERT_NE(p, nullptr);
-    std::string out;
-    char buf[512];
-    while (std::fgets(buf, sizeof buf, p)) out += buf;
-    ASSERT_EQ(::pclose(p), 0) << out;
+    const auto run = vgr::test::runCommand("/usr/bin/python3 " + script + " " + std::to_string(kModbusPort) + " 2>&1");
+    const std::string& out = run.out;
+    ASSERT_EQ(run.exitCode, 0) << out;
     const auto j = nlohmann::json::parse(out.substr(out.rfind('{')));
     EXPECT_EQ(j["error"].get<int>(), 0);
     EXPECT_EQ(j["found"].get<int>(), 1);

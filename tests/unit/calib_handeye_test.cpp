@@ -46,7 +46,7 @@ void poseError(const Pose& a, const Pose& b, double& mm, double& deg) {
   deg = se3::rotationAngleDeg(d.linear());
 }
 
-// The done-when: 15 poses, 0.2 px corners, 0.05 mm / 0.01 deg robot noise, both
+// The accuracy target of docs/calibration.md: 15 poses, 0.2 px corners, 0.05 mm / 0.01 deg robot noise, both
 // configurations: the refined result within 0.5 mm and 0.05 deg of the truth.
 class calib_handeye_accuracy : public ::testing::TestWithParam<HandEyeConfig> {};
 

@@ -41,7 +41,7 @@ std::vector<ViewDetection> cornerViews(const sim::TrueCamera& cam, const Pattern
 }
 
 void expectCloseToTruth(const vision::calib::CameraIntrinsics& c, const sim::TrueCamera& t, const std::string& what) {
-  // Done-when bound of the calibration issue: focal within 0.1 %, principal point within 0.5 px.
+  // The accuracy bound of docs/calibration.md: focal within 0.1 %, principal point within 0.5 px.
   EXPECT_LT(std::abs(c.fx() / t.cameraMatrix(0, 0) - 1), 0.001) << what << ": fx " << c.fx();
   EXPECT_LT(std::abs(c.fy() / t.cameraMatrix(1, 1) - 1), 0.001) << what << ": fy " << c.fy();
   EXPECT_LT(std::abs(c.cx() - t.cameraMatrix(0, 2)), 0.5) << what << ": cx " << c.cx();
@@ -63,7 +63,7 @@ PatternSpec charucoBoard() {
   return s;
 }
 
-// The issue's done-when: 0.1 px corner noise, realistic distortion (including tangential).
+// The accuracy target of docs/calibration.md: 0.1 px corner noise, realistic distortion (including tangential).
 // The principal point is the weakest parameter: it trades off against the tangential
 // distortion, and what pins it down is many corners far out in the image corners. The
 // standard deviation calibrateIntrinsics reports is ~0.3-0.4 px for 30 views of an 11x8

@@ -10,7 +10,7 @@
 //    a true positive.
 //
 // What holds and is asserted (docs/localization-methods.md, "Paper 001's Table 1"):
-//  - orb-adk's match TP >= 98 % (the issue's bar; paper 001, section 4.2: ADK's "false matching
+//  - orb-adk's match TP >= 98 % (our bar; paper 001, section 4.2: ADK's "false matching
 //    rate ... below 1 per cent"). It is NOT asserted that orb-adk beats the baselines on this
 //    rate: their inliers are > 99.8 % true as well (a 3 px robust fit leaves no room for
 //    Table 1's 15-point gap; only looser baseline thresholds open a gap of 2-6 points), and

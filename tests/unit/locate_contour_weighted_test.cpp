@@ -7,7 +7,7 @@
 #include <opencv2/core.hpp>
 
 #include "sim/part_scene.hpp"
-#include "tests/unit/locate_test_images.hpp"
+#include "sim/synth_part.hpp"
 #include "vision/locate/locator.hpp"
 
 // The scene renderer's multi-height part (sim/part_scene.hpp: base plate 8 mm, rib 20 mm,
@@ -57,7 +57,7 @@ TEST(locate_contour_weighted, RenderedMultiHeightPartWithinPaperTolerance) {
     const auto& d = out->parts.front();
     const auto& t = scene.parts.front();
     maxPos = std::max(maxPos, std::hypot(d.u - t.uPx, d.v - t.vPx));
-    maxAng = std::max(maxAng, vgr::test::angleDiffDeg(d.angleDeg, t.angleDeg));
+    maxAng = std::max(maxAng, vgr::sim::synth::angleDiffDeg(d.angleDeg, t.angleDeg));
     maxShift = std::max(maxShift, std::hypot(t.uPx - 639.5, t.vPx - 511.5));
   }
   // Paper 000's success criterion is 4 px / 0.5 deg; with a translation per height the

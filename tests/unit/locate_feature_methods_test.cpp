@@ -1,6 +1,6 @@
 // The feature and contour methods (orb-ransac, orb-prosac, orb-adk: paper 001's Table 1
 // methods; contour-weighted: paper 000) against synthetic images with known truth
-// (tests/unit/locate_test_images.hpp): a textured part turned within +-60 degrees, noise
+// (sim/synth_part.hpp): a textured part turned within +-60 degrees, noise
 // sigma 5, 1280 x 1024. One parameterised suite: found within tolerance with true matches,
 // nothing without the part, three parts, max_parts, and named errors.
 #include <cmath>
@@ -10,12 +10,12 @@
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 
-#include "tests/unit/locate_test_images.hpp"
+#include "sim/synth_part.hpp"
 #include "vision/locate/locator.hpp"
 
 namespace {
 
-using vgr::test::PartPose;
+using vgr::sim::synth::PartPose;
 
 const cv::Size kSize(1280, 1024);
 
@@ -29,8 +29,8 @@ struct Case {
 class locate_feature_methods : public ::testing::TestWithParam<Case> {};
 
 struct Fixture {
-  vgr::test::SynthPart part = vgr::test::makeTexturedPart(false);
-  vgr::test::SynthTemplate templ = vgr::test::makeTemplate(part);
+  vgr::sim::synth::SynthPart part = vgr::sim::synth::makeTexturedPart(false);
+  vgr::sim::synth::SynthTemplate templ = vgr::sim::synth::makeTemplate(part);
   vgr::vision::TaughtTemplate taught() const {
     vgr::vision::TaughtTemplate t;
     t.grasp = templ.grasp;
@@ -48,19 +48,19 @@ TEST_P(locate_feature_methods, FindsThePartWithinTolerance) {
   std::mt19937 rng(11);
   double maxPos = 0, maxAng = 0;
   for (int k = 0; k < 4; ++k) {
-    const PartPose truth = vgr::test::randomPose(rng, kSize, 60);
-    const cv::Mat img = vgr::test::renderScene(f.part, {truth}, kSize, 5.0, 100 + k);
+    const PartPose truth = vgr::sim::synth::randomPose(rng, kSize, 60);
+    const cv::Mat img = vgr::sim::synth::renderScene(f.part, {truth}, kSize, 5.0, 100 + k);
     auto out = (*loc)->locate(img);
     ASSERT_TRUE(out.has_value()) << out.error().message;
     ASSERT_EQ(out->parts.size(), 1u) << "image " << k;
     const auto& d = out->parts.front();
     maxPos = std::max(maxPos, std::hypot(d.u - truth.u, d.v - truth.v));
-    maxAng = std::max(maxAng, vgr::test::angleDiffDeg(d.angleDeg, truth.angleDeg));
+    maxAng = std::max(maxAng, vgr::sim::synth::angleDiffDeg(d.angleDeg, truth.angleDeg));
     EXPECT_GE(d.score, 0.3);
     EXPECT_LE(d.score, 1.0);
     EXPECT_FALSE(out->matches.empty());
     EXPECT_GE(out->candidateMatches, static_cast<int>(out->matches.size()));
-    EXPECT_GE(vgr::test::matchTruePositiveRate(out->matches, truth, f.templ.grasp), 0.95);
+    EXPECT_GE(vgr::sim::synth::matchTruePositiveRate(out->matches, truth, f.templ.grasp), 0.95);
   }
   // Well inside paper 000's 4 px / 0.5 deg: a homography from >= 100 ORB matches at sigma 5
   // (1 px / 0.3 deg), contour-weighted's gradient refinement (0.5 px / 0.1 deg).
@@ -75,11 +75,11 @@ TEST_P(locate_feature_methods, FindsNothingWithoutThePart) {
   auto loc = vgr::vision::makeLocator(c.method, f.templ.image, f.taught());
   ASSERT_TRUE(loc.has_value()) << loc.error().message;
   for (std::uint64_t seed : {1u, 2u}) {
-    auto out = (*loc)->locate(vgr::test::renderDistractorScene(kSize, 5.0, seed));
+    auto out = (*loc)->locate(vgr::sim::synth::renderDistractorScene(kSize, 5.0, seed));
     ASSERT_TRUE(out.has_value());
     EXPECT_TRUE(out->parts.empty()) << "seed " << seed << ": score " << out->parts.front().score;
   }
-  auto out = (*loc)->locate(cv::Mat(kSize, CV_8U, cv::Scalar(vgr::test::kBackground)));
+  auto out = (*loc)->locate(cv::Mat(kSize, CV_8U, cv::Scalar(vgr::sim::synth::kBackground)));
   ASSERT_TRUE(out.has_value());
   EXPECT_TRUE(out->parts.empty());
 }
@@ -92,17 +92,17 @@ TEST_P(locate_feature_methods, FindsThreeParts) {
   auto loc = vgr::vision::makeLocator(c.method, f.templ.image, taught);
   ASSERT_TRUE(loc.has_value()) << loc.error().message;
   std::mt19937 rng(5);
-  const auto truth = vgr::test::threePoses(rng, kSize, 60);
-  const cv::Mat img = vgr::test::renderScene(f.part, truth, kSize, 5.0, 9);
+  const auto truth = vgr::sim::synth::threePoses(rng, kSize, 60);
+  const cv::Mat img = vgr::sim::synth::renderScene(f.part, truth, kSize, 5.0, 9);
   auto out = (*loc)->locate(img);
   ASSERT_TRUE(out.has_value());
   ASSERT_EQ(out->parts.size(), 3u);
   std::vector<int> hit(3, 0);
   for (const auto& d : out->parts) {
-    const auto& t = truth[vgr::test::nearestPose(truth, d.u, d.v)];
-    ++hit[vgr::test::nearestPose(truth, d.u, d.v)];
+    const auto& t = truth[vgr::sim::synth::nearestPose(truth, d.u, d.v)];
+    ++hit[vgr::sim::synth::nearestPose(truth, d.u, d.v)];
     EXPECT_LT(std::hypot(d.u - t.u, d.v - t.v), c.posTolPx);
-    EXPECT_LT(vgr::test::angleDiffDeg(d.angleDeg, t.angleDeg), c.angTolDeg);
+    EXPECT_LT(vgr::sim::synth::angleDiffDeg(d.angleDeg, t.angleDeg), c.angTolDeg);
   }
   EXPECT_EQ(hit, (std::vector<int>{1, 1, 1}));
   for (size_t k = 1; k < out->parts.size(); ++k) EXPECT_GE(out->parts[k - 1].score, out->parts[k].score);

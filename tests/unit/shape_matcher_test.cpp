@@ -9,7 +9,8 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "bench/locate_scenes.hpp"
+#include "core/angles.hpp"
+#include "sim/locate_scenes.hpp"
 #include "vision/locate/locator.hpp"
 
 namespace {
@@ -25,8 +26,8 @@ constexpr double kPosTolPx = 0.2;
 constexpr double kAngTolDeg = 0.1;
 
 struct Fixture {
-  vgr::sim::SceneRenderer renderer = vgr::bench::makeRenderer(kW, kH, 1200, 800, kSigma, 3);  // 1.5 px/mm
-  vgr::bench::Template tp = vgr::bench::makeTemplate(renderer, 0.0, 12, 99);
+  vgr::sim::SceneRenderer renderer = vgr::sim::makeRenderer(kW, kH, 1200, 800, kSigma, 3);  // 1.5 px/mm
+  vgr::sim::SceneTemplate tp = vgr::sim::makeSceneTemplate(renderer, 0.0, 12, 99);
   // Grasp point 30 px along the part's axis from its centroid (toward the tip): it must turn
   // with the part.
   vgr::vision::TaughtTemplate taught() const {
@@ -62,7 +63,7 @@ TEST(shape_matcher, FindsThePartAtAnyAngleToSubPixelAccuracy) {
   const double poses[][3] = {{300.2, 260.7, 0.0},    {900.6, 700.3, 37.3},  {640.0, 512.0, 90.0},   {210.4, 800.9, 179.6},
                              {1050.3, 230.1, -45.2}, {500.5, 600.5, -123.4}, {777.7, 333.3, 12.34}, {400.1, 420.9, -179.9}};
   for (std::size_t i = 0; i < std::size(poses); ++i) {
-    const auto t = vgr::bench::truthAt(f.renderer, poses[i][0], poses[i][1], f.tp.truth.angleImgDeg + poses[i][2]);
+    const auto t = vgr::sim::truthAt(f.renderer, poses[i][0], poses[i][1], f.tp.truth.angleImgDeg + poses[i][2]);
     f.renderer.renderTruth(t, 1000 + i, img);
     auto out = loc->locate(img);
     ASSERT_TRUE(out.has_value()) << out.error().message;
@@ -79,14 +80,14 @@ TEST(shape_matcher, AngleRangeAndRoiLimitTheSearch) {
   auto loc = make(f, taught);
   ASSERT_TRUE(loc);
   cv::Mat img;
-  auto t = vgr::bench::truthAt(f.renderer, 640.3, 500.8, f.tp.truth.angleImgDeg + 41.0);
+  auto t = vgr::sim::truthAt(f.renderer, 640.3, 500.8, f.tp.truth.angleImgDeg + 41.0);
   f.renderer.renderTruth(t, 7, img);
   auto out = loc->locate(img);
   ASSERT_TRUE(out.has_value());
   ASSERT_EQ(out->parts.size(), 1u);
   expectPose(f, out->parts.front(), t, kPosTolPx, kAngTolDeg);
 
-  t = vgr::bench::truthAt(f.renderer, 640.3, 500.8, f.tp.truth.angleImgDeg + 100.0);
+  t = vgr::sim::truthAt(f.renderer, 640.3, 500.8, f.tp.truth.angleImgDeg + 100.0);
   f.renderer.renderTruth(t, 8, img);
   out = loc->locate(img);
   ASSERT_TRUE(out.has_value());
@@ -100,7 +101,7 @@ TEST(shape_matcher, AngleRangeAndRoiLimitTheSearch) {
   auto outRoi = f.taught();
   outRoi.searchRoi = {0, 0, 600, 500};
   auto locOut = make(f, outRoi);
-  t = vgr::bench::truthAt(f.renderer, 900.4, 700.6, f.tp.truth.angleImgDeg - 70.0);
+  t = vgr::sim::truthAt(f.renderer, 900.4, 700.6, f.tp.truth.angleImgDeg - 70.0);
   f.renderer.renderTruth(t, 9, img);
   out = locIn->locate(img);
   ASSERT_TRUE(out.has_value());
@@ -119,7 +120,7 @@ TEST(shape_matcher, FindsThePartWithAThirdOfItsOutlineOccluded) {
   // 2 x 48 (tip) = 411 px long and reaches 68 px behind the centroid. A belt-coloured block
   // over the back end, x < centroid - 44 px, hides the back edge and 24 px of each side:
   // 123 px, 30 % of the outline.
-  const auto t = vgr::bench::truthAt(f.renderer, 600.4, 480.3, f.tp.truth.angleImgDeg + 0.0);
+  const auto t = vgr::sim::truthAt(f.renderer, 600.4, 480.3, f.tp.truth.angleImgDeg + 0.0);
   f.renderer.renderTruth(t, 11, img);
   cv::rectangle(img, cv::Rect(static_cast<int>(std::lround(t.uPx)) - 44 - 100, static_cast<int>(t.vPx) - 60, 100, 120),
                 cv::Scalar(32), cv::FILLED);
@@ -134,7 +135,7 @@ TEST(shape_matcher, FindsThePartUnderA2To1IlluminationGradient) {
   Fixture f;
   auto loc = make(f, f.taught());
   cv::Mat img, lit;
-  const auto t = vgr::bench::truthAt(f.renderer, 700.2, 400.7, f.tp.truth.angleImgDeg + 63.0);
+  const auto t = vgr::sim::truthAt(f.renderer, 700.2, 400.7, f.tp.truth.angleImgDeg + 63.0);
   f.renderer.renderTruth(t, 12, img);
   // Brightness falls linearly from 1 at the left to 0.5 at the right.
   cv::Mat gain(img.size(), CV_32F);
@@ -155,7 +156,7 @@ TEST(shape_matcher, NoPartGivesNothingAndThreePartsGiveThree) {
   auto loc = make(f, taught);
   // Empty belt (the renderer with the part far outside the image).
   cv::Mat img;
-  auto away = vgr::bench::truthAt(f.renderer, 640, 512, 0);
+  auto away = vgr::sim::truthAt(f.renderer, 640, 512, 0);
   away.xMm += 5000;
   f.renderer.renderTruth(away, 13, img);
   auto out = loc->locate(img);
@@ -166,8 +167,8 @@ TEST(shape_matcher, NoPartGivesNothingAndThreePartsGiveThree) {
   auto cleanOpts = f.renderer.options();
   cleanOpts.noiseSigma = 0;
   const vgr::sim::SceneRenderer clean(f.renderer.model(), cleanOpts);
-  const SceneTruth truths[] = {vgr::bench::truthAt(clean, 250.3, 250.6, 20.0), vgr::bench::truthAt(clean, 900.8, 300.2, -100.0),
-                               vgr::bench::truthAt(clean, 640.5, 760.4, 170.0)};
+  const SceneTruth truths[] = {vgr::sim::truthAt(clean, 250.3, 250.6, 20.0), vgr::sim::truthAt(clean, 900.8, 300.2, -100.0),
+                               vgr::sim::truthAt(clean, 640.5, 760.4, 170.0)};
   cv::Mat one;
   img.setTo(0);
   for (const auto& t : truths) {
@@ -194,7 +195,7 @@ TEST(shape_matcher, NoPartGivesNothingAndThreePartsGiveThree) {
 TEST(shape_matcher, PolarityUseRejectsInvertedContrastIgnoreGlobalFindsIt) {
   Fixture f;
   cv::Mat img;
-  const auto t = vgr::bench::truthAt(f.renderer, 500.5, 500.5, f.tp.truth.angleImgDeg - 20.0);
+  const auto t = vgr::sim::truthAt(f.renderer, 500.5, 500.5, f.tp.truth.angleImgDeg - 20.0);
   f.renderer.renderTruth(t, 14, img);
   img = 255 - img;
   auto use = make(f, f.taught());

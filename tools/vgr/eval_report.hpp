@@ -39,7 +39,7 @@ struct EvalReport {
 
 Result<EvalReport> evaluate(const EvalOptions& options);
 
-// One JSON object (no newline) with the keys of issue 6: n, success_rate, pos_err_px_mean,
+// One JSON object (no newline) with the keys of docs/localization.md: n, success_rate, pos_err_px_mean,
 // pos_err_px_max, ang_err_deg_mean, ang_err_deg_max, time_ms_median, and the rest.
 std::string evalJson(const EvalReport& report, const EvalOptions& options);
 

@@ -1,4 +1,4 @@
-// The one interface every localization method implements (issues 6 and 7), and the factory
+// The one interface every localization method implements (docs/localization.md, docs/shape-matcher.md), and the factory
 // that builds a method's model from a taught template.
 //
 // Conventions (docs/architecture.md "Units"): image pixels, x right, y down, pixel centres

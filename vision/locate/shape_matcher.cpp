@@ -397,7 +397,7 @@ bool ShapeLocator::trackDown(int level, Candidate& c, double thr) {
 }
 
 // Parabola through the scores at +-1 px and +-1 angle step around the integer peak, per axis
-// (the peak interpolation of the issue; the least-squares refinement follows).
+// (sub-pixel peak interpolation, docs/shape-matcher.md; the least-squares refinement follows).
 void ShapeLocator::interpolatePeak(Candidate& c) {
   const double step = m_.levels[0].angleStep;
   // Hill-climb first so the peak is interior.

@@ -1,4 +1,4 @@
-// Method "shape" (issue 7): gradient-direction shape matching at any angle with sub-pixel
+// Method "shape" (docs/shape-matcher.md): gradient-direction shape matching at any angle with sub-pixel
 // pose refinement. The similarity is the mean normalised dot product of the model's and the
 // image's gradient directions (Steger, "Occlusion, clutter, and illumination invariant object
 // recognition", 2002, eq. 3; polarity variants eqs. 4-5), searched exhaustively over

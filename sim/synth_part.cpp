@@ -1,53 +1,14 @@
-// Synthetic test images for the localization methods (until the scene renderer of sim/
-// draws textured multi-height parts): a textured part drawn with OpenCV in its own "part
-// canvas" (belt-plane pixels), optionally with raised layers (a boss and a rib) above the
-// belt, placed into a scene by a known rotation + translation, seen by a pinhole camera
-// looking straight down, so that raised layers away from the principal point shift outward
-// by the projection difference of paper 000 (scale k = Hc / (Hc - h) about the principal
-// point), plus Gaussian noise.
-//
-// Conventions as vision/locate/locator.hpp: pixel centres at integers, y down, a pose's
-// angle is counter-clockwise as displayed, (u, v) is where the part's grasp point (on the
-// belt-level base layer) lands.
-#pragma once
+#include "sim/synth_part.hpp"
 
 #include <cmath>
-#include <cstdint>
 #include <numbers>
-#include <random>
-#include <vector>
+#include <utility>
 
-#include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "vision/locate/locator.hpp"
+namespace vgr::sim::synth {
 
-namespace vgr::test {
-
-struct PartPose {
-  double u = 0, v = 0;    // grasp point in the image, px
-  double angleDeg = 0;    // counter-clockwise as displayed
-};
-
-struct PartLayer {
-  cv::Mat texture;  // CV_8U, canvas size
-  cv::Mat alpha;    // CV_8U, canvas size, 255 = covered
-  std::vector<cv::Point> outline;  // canvas px
-  double heightMm = 0;
-};
-
-struct SynthPart {
-  cv::Size canvas;
-  cv::Point2d grasp;                // canvas px, on the base layer
-  std::vector<PartLayer> layers;    // base first, then raised layers by height
-};
-
-constexpr double kBackground = 30;     // belt gray level
-constexpr double kCameraHeightMm = 600;  // principal point to belt
-
-// A 320 x 220 px part: a plate with holes, texture and lettering; multiHeight adds a
-// textured boss 30 mm high on the right and a rib 45 mm high along the top edge.
-inline SynthPart makeTexturedPart(bool multiHeight) {
+SynthPart makeTexturedPart(bool multiHeight) {
   SynthPart part;
   part.canvas = {320, 220};
   part.grasp = {95, 120};
@@ -61,11 +22,13 @@ inline SynthPart makeTexturedPart(bool multiHeight) {
   cv::fillPoly(base.alpha, std::vector<std::vector<cv::Point>>{base.outline}, cv::Scalar(255), cv::LINE_AA);
   cv::fillPoly(base.texture, std::vector<std::vector<cv::Point>>{base.outline}, cv::Scalar(130), cv::LINE_AA);
   for (int k = 0; k < 90; ++k) {
-    const cv::Point c(std::uniform_int_distribution<int>(25, 295)(rng), std::uniform_int_distribution<int>(25, 195)(rng));
+    const cv::Point c(std::uniform_int_distribution<int>(25, 295)(rng),
+                      std::uniform_int_distribution<int>(25, 195)(rng));
     if (k % 3 == 0)
       cv::circle(base.texture, c, small(rng), cv::Scalar(gray(rng)), cv::FILLED, cv::LINE_AA);
     else if (k % 3 == 1)
-      cv::rectangle(base.texture, cv::Rect(c, cv::Size(small(rng), small(rng))), cv::Scalar(gray(rng)), cv::FILLED, cv::LINE_AA);
+      cv::rectangle(base.texture, cv::Rect(c, cv::Size(small(rng), small(rng))), cv::Scalar(gray(rng)), cv::FILLED,
+                    cv::LINE_AA);
     else
       cv::line(base.texture, c, c + cv::Point(small(rng) * 2, small(rng) - 9), cv::Scalar(gray(rng)), 2, cv::LINE_AA);
   }
@@ -100,9 +63,7 @@ inline SynthPart makeTexturedPart(bool multiHeight) {
   return part;
 }
 
-// Canvas px -> image px of a layer at heightMm for a part at `pose`, camera principal
-// point `pp` (paper 000's projection difference: k = Hc / (Hc - h) about pp).
-inline cv::Mat layerWarp(const SynthPart& part, const PartPose& pose, double heightMm, cv::Point2d pp) {
+cv::Mat layerWarp(const SynthPart& part, const PartPose& pose, double heightMm, cv::Point2d pp) {
   const double a = pose.angleDeg * std::numbers::pi / 180.0, c = std::cos(a), s = std::sin(a);
   // (x, y) -> (x c + y s, -x s + y c): counter-clockwise as displayed (y down).
   const double tx = pose.u - (c * part.grasp.x + s * part.grasp.y);
@@ -112,9 +73,8 @@ inline cv::Mat layerWarp(const SynthPart& part, const PartPose& pose, double hei
   return M;
 }
 
-// Draws the parts into `image` (CV_8U, `size`), with Gaussian noise of `noiseSigma` gray levels.
-inline cv::Mat renderScene(const SynthPart& part, const std::vector<PartPose>& poses, cv::Size size, double noiseSigma,
-                           std::uint64_t seed) {
+cv::Mat renderScene(const SynthPart& part, const std::vector<PartPose>& poses, cv::Size size, double noiseSigma,
+                    std::uint64_t seed) {
   cv::Mat scene(size, CV_32F, cv::Scalar(kBackground));
   const cv::Point2d pp(0.5 * (size.width - 1), 0.5 * (size.height - 1));
   for (const PartPose& pose : poses)
@@ -140,15 +100,7 @@ inline cv::Mat renderScene(const SynthPart& part, const std::vector<PartPose>& p
   return out;
 }
 
-// The template: the part at angle 0 with its grasp point at (margin + grasp), seen with the
-// principal point at the template's centre (taught under the camera centre), no noise.
-struct SynthTemplate {
-  cv::Mat image;
-  vision::PixelPoint grasp;
-  std::vector<vision::TemplateRegion> regions;  // raised layers first (height factor small), base last
-};
-
-inline SynthTemplate makeTemplate(const SynthPart& part, int margin = 30, double raisedHeightFactor = 0.05) {
+SynthTemplate makeTemplate(const SynthPart& part, int margin, double raisedHeightFactor) {
   SynthTemplate t;
   const cv::Size size(part.canvas.width + 2 * margin, part.canvas.height + 2 * margin);
   t.grasp = {part.grasp.x + margin, part.grasp.y + margin};
@@ -179,28 +131,23 @@ inline SynthTemplate makeTemplate(const SynthPart& part, int margin = 30, double
   return t;
 }
 
-// Random poses with the grasp point away from the border (angle in +-maxAngleDeg).
-inline PartPose randomPose(std::mt19937& rng, cv::Size size, double maxAngleDeg) {
-  std::uniform_real_distribution<double> u(260, size.width - 260.0), v(230, size.height - 230.0), a(-maxAngleDeg, maxAngleDeg);
+PartPose randomPose(std::mt19937& rng, cv::Size size, double maxAngleDeg) {
+  std::uniform_real_distribution<double> u(260, size.width - 260.0), v(230, size.height - 230.0),
+      a(-maxAngleDeg, maxAngleDeg);
   return {u(rng), v(rng), a(rng)};
 }
 
-// Three non-overlapping poses (one per third of the image width).
-inline std::vector<PartPose> threePoses(std::mt19937& rng, cv::Size size, double maxAngleDeg) {
+std::vector<PartPose> threePoses(std::mt19937& rng, cv::Size size, double maxAngleDeg) {
   std::vector<PartPose> out;
   std::uniform_real_distribution<double> jitter(-15, 15), v(300, size.height - 300.0), a(-maxAngleDeg, maxAngleDeg);
   for (int k = 0; k < 3; ++k) out.push_back({size.width * (k + 0.5) / 3.0 - 20 + jitter(rng), v(rng), a(rng)});
   return out;
 }
 
-inline double angleDiffDeg(double a, double b) { return std::abs(std::remainder(a - b, 360.0)); }
+double angleDiffDeg(double a, double b) { return std::abs(std::remainder(a - b, 360.0)); }
 
-// The match true-positive rate of paper 001 (Table 1) for accepted matches of a part at
-// `truth`: a match is true when its image point is within tolPx of where the template
-// point lands on the belt plane (raised-layer matches shift by the projection difference
-// and count as false).
-inline double matchTruePositiveRate(const std::vector<vision::MatchPair>& matches, const PartPose& truth,
-                                    vision::PixelPoint templateGrasp, double tolPx = 3.0) {
+double matchTruePositiveRate(const std::vector<vision::MatchPair>& matches, const PartPose& truth,
+                             vision::PixelPoint templateGrasp, double tolPx) {
   if (matches.empty()) return 0;
   const double a = truth.angleDeg * std::numbers::pi / 180.0, c = std::cos(a), s = std::sin(a);
   int good = 0;
@@ -212,17 +159,13 @@ inline double matchTruePositiveRate(const std::vector<vision::MatchPair>& matche
   return static_cast<double>(good) / static_cast<double>(matches.size());
 }
 
-}  // namespace vgr::test
-
-namespace vgr::test {
-
-// A scene without the part: belt, noise and a textured distractor (a different pattern).
-inline cv::Mat renderDistractorScene(cv::Size size, double noiseSigma, std::uint64_t seed) {
+cv::Mat renderDistractorScene(cv::Size size, double noiseSigma, std::uint64_t seed) {
   cv::Mat img(size, CV_8U, cv::Scalar(kBackground));
   std::mt19937 rng(static_cast<unsigned>(seed) + 77);
   std::uniform_int_distribution<int> gray(70, 235), x(400, 800), y(300, 700), r(3, 12);
   cv::rectangle(img, cv::Rect(380, 280, 440, 440), cv::Scalar(120), cv::FILLED);
-  for (int k = 0; k < 120; ++k) cv::circle(img, {x(rng), y(rng)}, r(rng), cv::Scalar(gray(rng)), cv::FILLED, cv::LINE_AA);
+  for (int k = 0; k < 120; ++k)
+    cv::circle(img, {x(rng), y(rng)}, r(rng), cv::Scalar(gray(rng)), cv::FILLED, cv::LINE_AA);
   cv::Mat noise(size, CV_32F), f;
   cv::RNG(seed).fill(noise, cv::RNG::NORMAL, 0.0, noiseSigma);
   img.convertTo(f, CV_32F);
@@ -231,12 +174,11 @@ inline cv::Mat renderDistractorScene(cv::Size size, double noiseSigma, std::uint
   return img;
 }
 
-// Index of the truth pose nearest to (u, v).
-inline size_t nearestPose(const std::vector<PartPose>& poses, double u, double v) {
+size_t nearestPose(const std::vector<PartPose>& poses, double u, double v) {
   size_t best = 0;
   for (size_t k = 1; k < poses.size(); ++k)
     if (std::hypot(poses[k].u - u, poses[k].v - v) < std::hypot(poses[best].u - u, poses[best].v - v)) best = k;
   return best;
 }
 
-}  // namespace vgr::test
+}  // namespace vgr::sim::synth

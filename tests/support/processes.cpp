@@ -1,0 +1,71 @@
+#include "tests/support/processes.hpp"
+
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <utility>
+
+#include <gtest/gtest.h>
+
+#include "tests/support/command.hpp"
+
+namespace vgr::test {
+
+std::unique_ptr<ChildProcess> startEmulator(const std::vector<std::string>& args, const std::string& logPath,
+                                            std::chrono::milliseconds timeout) {
+  std::vector<std::string> argv = {binPath("vgr-sim-camera")};
+  argv.insert(argv.end(), args.begin(), args.end());
+  auto p = ChildProcess::spawn(argv, logPath);
+  if (!p) {
+    ADD_FAILURE() << "could not start " << argv[0];
+    return nullptr;
+  }
+  if (!p->waitForLine("\"ready\"", timeout)) {
+    ADD_FAILURE() << "emulator did not start (port 3956 busy?)" << (logPath.empty() ? "" : ", log: " + logPath);
+    return nullptr;
+  }
+  return std::make_unique<ChildProcess>(std::move(*p));
+}
+
+NotifySocket::NotifySocket(std::string path) : path_(std::move(path)) {
+  ::unlink(path_.c_str());
+  fd_ = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  sockaddr_un sa{};
+  sa.sun_family = AF_UNIX;
+  std::snprintf(sa.sun_path, sizeof sa.sun_path, "%s", path_.c_str());
+  if (fd_ >= 0 && ::bind(fd_, reinterpret_cast<sockaddr*>(&sa), sizeof sa) != 0) {
+    ::close(fd_);
+    fd_ = -1;
+  }
+  timeval tv{0, 100000};
+  if (fd_ >= 0) ::setsockopt(fd_, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+}
+
+NotifySocket::~NotifySocket() {
+  if (fd_ >= 0) ::close(fd_);
+  ::unlink(path_.c_str());
+}
+
+bool NotifySocket::waitFor(const std::string& what, std::chrono::milliseconds timeout) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (fd_ >= 0 && std::chrono::steady_clock::now() < deadline) {
+    char buf[512];
+    const ssize_t n = ::recv(fd_, buf, sizeof buf, 0);
+    if (n > 0 && std::string(buf, static_cast<std::size_t>(n)).find(what) != std::string::npos) return true;
+  }
+  return false;
+}
+
+std::optional<ChildProcess> spawnWithNotify(const std::vector<std::string>& argv, const std::string& logPath,
+                                            const NotifySocket& notify) {
+  // The child inherits the environment at fork: set it around the spawn only.
+  ::setenv("NOTIFY_SOCKET", notify.path().c_str(), 1);
+  auto p = ChildProcess::spawn(argv, logPath);
+  ::unsetenv("NOTIFY_SOCKET");
+  return p;
+}
+
+}  // namespace vgr::test
