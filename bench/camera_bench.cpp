@@ -18,7 +18,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "config/cell_config.hpp"
-#include "daemon/process.hpp"
+#include "core/child_process.hpp"
 #include "drivers/camera.hpp"
 #include "sim/scene.hpp"
 
@@ -65,7 +65,7 @@ int main(int argc, char** argv) {
     cv::imwrite((dir / "scene.png").string(), img);
     emu.insert(emu.end(), {"--images", dir.string()});
   }
-  auto proc = vgr::daemon::ChildProcess::spawn(emu, (dir / "camera.log").string());
+  auto proc = vgr::ChildProcess::spawn(emu, (dir / "camera.log").string());
   if (!proc || !proc->waitForLine("\"ready\"", milliseconds(10000))) {
     std::fprintf(stderr, "vgr-bench-camera: the emulator did not start (see %s)\n", (dir / "camera.log").c_str());
     return 1;

@@ -43,7 +43,7 @@ WarmSize warmUpSize(const config::CellConfig& cell, const vision::calib::PixelMa
 
 }  // namespace
 
-CycleRunner::CycleRunner(const config::CellConfig& cell, CameraWorker& camera, CycleSinks sinks)
+CycleRunner::CycleRunner(const config::CellConfig& cell, drivers::CameraWorker& camera, CycleSinks sinks)
     : cell_(cell), camera_(camera), sinks_(std::move(sinks)) {
   auto m = makeCellMapping(cell);
   if (m) {

@@ -26,7 +26,7 @@
 
 #include "config/cell_config.hpp"
 #include "core/cycle.hpp"
-#include "daemon/camera_worker.hpp"
+#include "drivers/camera_worker.hpp"
 #include "vision/calib/pixel_mapping.hpp"
 #include "vision/locate/locator.hpp"
 #include "vision/part_poses.hpp"
@@ -44,7 +44,7 @@ class CycleRunner {
  public:
   static constexpr std::size_t kQueueCapacity = 4;
 
-  CycleRunner(const config::CellConfig& cell, CameraWorker& camera, CycleSinks sinks);
+  CycleRunner(const config::CellConfig& cell, drivers::CameraWorker& camera, CycleSinks sinks);
   ~CycleRunner();
 
   // Start-up, before start(): builds every job's locator (a folder: job.yaml, template,
@@ -72,7 +72,7 @@ class CycleRunner {
   CycleResult runCycle(const Trigger& t);
 
   const config::CellConfig& cell_;
-  CameraWorker& camera_;
+  drivers::CameraWorker& camera_;
   CycleSinks sinks_;
   // The cell's pixel -> robot mapping, or why it cannot be had (then every job answers
   // NOT_CALIBRATED with that message).

@@ -13,12 +13,12 @@
 #include <boost/asio/steady_timer.hpp>
 
 #include "core/log.hpp"
-#include "daemon/camera_worker.hpp"
 #include "daemon/cycle_runner.hpp"
 #include "daemon/journal.hpp"
+#include "daemon/plc_links.hpp"
 #include "daemon/result_store.hpp"
 #include "drivers/camera.hpp"
-#include "daemon/plc_links.hpp"
+#include "drivers/camera_worker.hpp"
 #include "protocol/modbus_map.hpp"  // modbusResultFrom
 #include "protocol/robot_server.hpp"
 
@@ -35,7 +35,7 @@ struct VgrdApp::Impl {
   asio::steady_timer watchdogTimer{io};
   asio::steady_timer statsTimer{io};
   Journal journal;
-  std::unique_ptr<CameraWorker> camera;
+  std::unique_ptr<drivers::CameraWorker> camera;
   std::unique_ptr<CycleRunner> cycles;
   std::unique_ptr<ResultStore> results;
   // The PLC side: the Modbus server and/or client mode, behind one interface.
@@ -138,7 +138,7 @@ Result<void> VgrdApp::start() {
 
   auto cam = drivers::makeCamera(s.cfg.camera);
   if (!cam) return std::unexpected(cam.error());
-  s.camera = std::make_unique<CameraWorker>(s.cfg.camera, std::move(*cam));
+  s.camera = std::make_unique<drivers::CameraWorker>(s.cfg.camera, std::move(*cam));
 
   std::set<int> jobs;
   for (const auto& j : s.cfg.jobs) jobs.insert(j.id);

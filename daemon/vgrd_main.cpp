@@ -8,6 +8,7 @@
 
 #include "config/cell_config.hpp"
 #include "core/log.hpp"
+#include "daemon/check.hpp"
 #include "daemon/vgrd_app.hpp"
 
 int main(int argc, char** argv) {
@@ -22,25 +23,25 @@ int main(int argc, char** argv) {
   app.add_option("--log-level", logLevel, "override cell.log_level");
   CLI11_PARSE(app, argc, argv);
 
-  auto cfg = vgr::config::loadCellConfig(configPath);
-  if (!cfg) {
-    std::fprintf(stderr, "vgrd: %s\n", cfg.error().message.c_str());
+  auto checked = vgr::daemon::checkCellConfig(configPath);
+  if (!checked) {
+    std::fprintf(stderr, "vgrd: %s\n", checked.error().message.c_str());
     return 2;
   }
   if (check) {
-    std::printf("%s: ok (%zu job(s), %zu robot endpoint(s), Modbus %s)\n", configPath.c_str(), cfg->jobs.size(),
-                cfg->robots.size(), cfg->modbus.enabled ? "on" : "off");
+    std::printf("%s: ok (%s)\n", configPath.c_str(), checked->summary.c_str());
     return 0;
   }
-  if (!journalPath.empty()) cfg->journalPath = journalPath;
+  vgr::config::CellConfig& cfg = checked->config;
+  if (!journalPath.empty()) cfg.journalPath = journalPath;
   vgr::log::Level level = vgr::log::Level::Info;
-  if (!vgr::log::parseLevel(logLevel.empty() ? cfg->logLevel : logLevel, level)) {
+  if (!vgr::log::parseLevel(logLevel.empty() ? cfg.logLevel : logLevel, level)) {
     std::fprintf(stderr, "vgrd: unknown log level '%s'\n", logLevel.c_str());
     return 2;
   }
   vgr::log::setDefaultLevel(level);
 
-  vgr::daemon::VgrdApp daemon(std::move(*cfg));
+  vgr::daemon::VgrdApp daemon(std::move(cfg));
   if (auto r = daemon.start(); !r) {
     std::fprintf(stderr, "vgrd: %s\n", r.error().message.c_str());
     return 1;

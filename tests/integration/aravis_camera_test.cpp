@@ -9,8 +9,8 @@
 #include <opencv2/core.hpp>
 
 #include "config/cell_config.hpp"
-#include "daemon/camera_worker.hpp"
 #include "drivers/camera.hpp"
+#include "drivers/camera_worker.hpp"
 #include "sim/scene.hpp"
 #include "tests/support/processes.hpp"
 #include "vision/locate/moments_locator.hpp"
@@ -102,7 +102,7 @@ TEST(CameraWorker, ReconnectsAfterTheCameraComesBack) {
   auto emulator = startEmulator(1);
   auto cam = vgr::drivers::makeCamera(cfg.camera);
   ASSERT_TRUE(cam.has_value());
-  vgr::daemon::CameraWorker worker(cfg.camera, std::move(*cam));
+  vgr::drivers::CameraWorker worker(cfg.camera, std::move(*cam));
   worker.start();
   ASSERT_TRUE(worker.waitStreaming(milliseconds(5000)));
   vgr::drivers::Frame frame;

@@ -10,12 +10,12 @@
 #include <string>
 #include <vector>
 
-#include "daemon/process.hpp"
+#include "core/child_process.hpp"
 
 namespace vgr::test {
 
 // The one implementation (shared with `vgr demo`); only this header names where it lives.
-using ChildProcess = vgr::daemon::ChildProcess;
+using ChildProcess = vgr::ChildProcess;
 
 // vgr-sim-camera with `args`, stderr appended to `logPath` (inherited when empty), waited for
 // until it prints its "ready" line. Null, with a test failure recorded, when it did not come

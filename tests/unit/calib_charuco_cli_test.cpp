@@ -1,4 +1,4 @@
-// `vgr calibrate synth / intrinsics --pattern charuco` in-process (daemon/calibrate.cpp): a
+// `vgr calibrate synth / intrinsics --pattern charuco` in-process (tools/vgr/calibrate_*.cpp): a
 // rendered ChArUco set with partial views calibrates and writes the std devs; a board that is
 // never found is an error naming every image and what to check. Files in a temporary
 // folder, no sockets.
@@ -12,7 +12,8 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "daemon/calibrate.hpp"
+#include "tools/vgr/calibrate_intrinsics.hpp"
+#include "tools/vgr/calibrate_synth.hpp"
 #include "vision/calib/intrinsics.hpp"
 
 namespace {
@@ -27,8 +28,8 @@ class calib_charuco_cli : public ::testing::Test {
     fs::create_directories(dir_);
   }
   void TearDown() override { fs::remove_all(dir_); }
-  static vgr::daemon::CalibPatternOptions board() {
-    vgr::daemon::CalibPatternOptions p;
+  static vgr::tools::CalibPatternOptions board() {
+    vgr::tools::CalibPatternOptions p;
     p.pattern = "charuco";
     p.cols = 11;
     p.rows = 8;
@@ -40,7 +41,7 @@ class calib_charuco_cli : public ::testing::Test {
 };
 
 TEST_F(calib_charuco_cli, rendered_partial_views_calibrate) {
-  vgr::daemon::CalibSynthOptions s;
+  vgr::tools::CalibSynthOptions s;
   s.kind = "intrinsics";
   s.out = (dir_ / "set").string();
   s.pattern = board();
@@ -48,13 +49,13 @@ TEST_F(calib_charuco_cli, rendered_partial_views_calibrate) {
   s.distanceMm = 420;
   s.maxTiltDeg = 35;
   s.partialShare = 0.5;
-  ASSERT_EQ(vgr::daemon::runCalibrateSynth(s), 0);
-  vgr::daemon::CalibIntrinsicsOptions o;
+  ASSERT_EQ(vgr::tools::runCalibrateSynth(s), 0);
+  vgr::tools::CalibIntrinsicsOptions o;
   o.images = s.out + "/plate_*.png";
   o.pattern = board();
   o.out = s.out + "/intrinsics.yaml";
   ::testing::internal::CaptureStderr();
-  const int rc = vgr::daemon::runCalibrateIntrinsics(o);
+  const int rc = vgr::tools::runCalibrateIntrinsics(o);
   const std::string err = ::testing::internal::GetCapturedStderr();
   ASSERT_EQ(rc, 0) << err;
   EXPECT_NE(err.find("(partial view)"), std::string::npos) << err;
@@ -72,12 +73,12 @@ TEST_F(calib_charuco_cli, rendered_partial_views_calibrate) {
 TEST_F(calib_charuco_cli, a_board_never_found_names_the_images) {
   cv::imwrite((dir_ / "a.png").string(), cv::Mat(600, 800, CV_8UC1, cv::Scalar(120)));
   cv::imwrite((dir_ / "b.png").string(), cv::Mat(600, 800, CV_8UC1, cv::Scalar(60)));
-  vgr::daemon::CalibIntrinsicsOptions o;
+  vgr::tools::CalibIntrinsicsOptions o;
   o.images = (dir_ / "*.png").string();
   o.pattern = board();
   o.out = (dir_ / "i.yaml").string();
   ::testing::internal::CaptureStderr();
-  const int rc = vgr::daemon::runCalibrateIntrinsics(o);
+  const int rc = vgr::tools::runCalibrateIntrinsics(o);
   const std::string err = ::testing::internal::GetCapturedStderr();
   EXPECT_EQ(rc, 2);
   EXPECT_NE(err.find("the charuco 11x8 was found in none of the 2 images (a.png, b.png)"), std::string::npos) << err;
@@ -87,12 +88,12 @@ TEST_F(calib_charuco_cli, a_board_never_found_names_the_images) {
   // Bad board options are refused before any image is read, naming the value.
   o.pattern.dictionary = "DICT_5X5_10";
   ::testing::internal::CaptureStderr();
-  EXPECT_EQ(vgr::daemon::runCalibrateIntrinsics(o), 2);
+  EXPECT_EQ(vgr::tools::runCalibrateIntrinsics(o), 2);
   EXPECT_NE(::testing::internal::GetCapturedStderr().find("--dict 'DICT_5X5_10'"), std::string::npos);
   o.pattern = board();
   o.pattern.markerMm = 25;
   ::testing::internal::CaptureStderr();
-  EXPECT_EQ(vgr::daemon::runCalibrateIntrinsics(o), 2);
+  EXPECT_EQ(vgr::tools::runCalibrateIntrinsics(o), 2);
   EXPECT_NE(::testing::internal::GetCapturedStderr().find("--marker 25"), std::string::npos);
 }
 

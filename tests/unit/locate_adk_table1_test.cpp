@@ -2,7 +2,7 @@
 // rendered set: multi-height parts (3 levels, grasped on the 35 mm boss), +-60 degrees,
 // noise sigma 5, six same-texture decoys per image (`vgr sim render --decoys 6`,
 // docs/datasets.md), 1280 x 1024, one part per image; rendered in memory (no files) to keep
-// the test short. Both rates are scored as `vgr eval` scores them (daemon/locate_eval.cpp):
+// the test short. Both rates are scored as `vgr eval` scores them (tools/vgr/eval_report.cpp):
 //  - match TP: the best part's accepted matches whose template point, on any of the part's
 //    levels, carried by the truth pose into the image, lands within 5 px of the matched point;
 //  - grasp TP (paper 001, section 5.1, the one definition of a true positive the paper gives,

@@ -1,5 +1,5 @@
 // Job folders (config/job.hpp): round trip through job.yaml, and broken jobs reported with
-// file, line and key. `vgr eval` (daemon/locate_eval.hpp) on a small rendered dataset.
+// file, line and key. `vgr eval` (tools/vgr/eval_report.hpp) on a small rendered dataset.
 #include <filesystem>
 #include <fstream>
 
@@ -14,7 +14,7 @@
 
 #include "config/cell_config.hpp"
 #include "config/job.hpp"
-#include "daemon/locate_eval.hpp"
+#include "tools/vgr/eval_report.hpp"
 #include "sim/dataset.hpp"
 
 namespace {
@@ -143,10 +143,10 @@ TEST(locate_job, EvalScoresAMethodAgainstTheDatasetTruth) {
   j.grasps = {j.taught.grasp};
   ASSERT_TRUE(vgr::config::writeJob(j).has_value());
 
-  vgr::daemon::EvalOptions o;
+  vgr::tools::EvalOptions o;
   o.jobFolder = j.folder;
   o.datasetFolder = d.outDir;
-  auto rep = vgr::daemon::evaluate(o);
+  auto rep = vgr::tools::evaluate(o);
   ASSERT_TRUE(rep.has_value()) << rep.error().message;
   EXPECT_EQ(rep->images, 6);
   EXPECT_EQ(rep->n, sum->parts + sum->emptyImages);
@@ -155,18 +155,18 @@ TEST(locate_job, EvalScoresAMethodAgainstTheDatasetTruth) {
   EXPECT_EQ(rep->falsePositives, 0);
   // The flat part with moments: the centroid is exact to ~0.1 px (moments_locator_test).
   EXPECT_DOUBLE_EQ(rep->successRate(), 1.0);
-  const auto js = nlohmann::json::parse(vgr::daemon::evalJson(*rep, o));
+  const auto js = nlohmann::json::parse(vgr::tools::evalJson(*rep, o));
   for (const char* k : {"n", "success_rate", "pos_err_px_mean", "pos_err_px_max", "ang_err_deg_mean", "ang_err_deg_max", "time_ms_median"})
     EXPECT_TRUE(js.contains(k)) << k;
   EXPECT_LT(js["pos_err_px_max"].get<double>(), 0.5);
 
   // A stricter tolerance than the errors fails every part but keeps the empty images.
   o.posTolPx = 1e-6;
-  auto strict = vgr::daemon::evaluate(o);
+  auto strict = vgr::tools::evaluate(o);
   ASSERT_TRUE(strict.has_value());
   EXPECT_EQ(strict->successes, sum->emptyImages);
   o.plotPath = (dir / "errors.png").string();
-  ASSERT_TRUE(vgr::daemon::plotErrors(*rep, o, o.plotPath).has_value());
+  ASSERT_TRUE(vgr::tools::plotErrors(*rep, o, o.plotPath).has_value());
   EXPECT_FALSE(cv::imread(o.plotPath).empty());
   fs::remove_all(dir);
 }

@@ -1,4 +1,4 @@
-#include "daemon/demo.hpp"
+#include "tools/vgr/demo.hpp"
 
 #include <signal.h>
 #include <sys/socket.h>
@@ -14,16 +14,17 @@
 #include <optional>
 #include <vector>
 
+#include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <yaml-cpp/yaml.h>
 
 #include "config/cell_config.hpp"
-#include "daemon/process.hpp"
+#include "core/child_process.hpp"
 #include "sim/cell_scenes.hpp"
 #include "sim/dataset.hpp"
 
-namespace vgr::daemon {
+namespace vgr::tools {
 namespace fs = std::filesystem;
 using nlohmann::json;
 using std::chrono::milliseconds;
@@ -386,4 +387,19 @@ int runDemo(const DemoOptions& o) {
   return (lost == 0 && robotsOk) ? 0 : 1;
 }
 
-}  // namespace vgr::daemon
+CLI::App* DemoCommand::add(CLI::App& parent) {
+  auto& demo = options_;
+  auto* demoCmd = parent.add_subcommand("demo", "run the simulated cell (camera emulator, vgrd, PLC and robot simulators) for N cycles");
+  demoCmd->add_option("--cycles", demo.cycles, "number of PLC-triggered cycles")->check(CLI::Range(1, 1000000));
+  demoCmd->add_option("--config", demo.configPath, "cell config (default: the embedded config/examples/sim-cell.yaml)");
+  demoCmd->add_option("--bin-dir", demo.binDir, "folder of vgrd and the simulators (default: next to vgr)");
+  demoCmd->add_option("--work-dir", demo.workDir, "folder for logs, journal and truth (default: a new /tmp/vgr-demo-*)");
+  demoCmd->add_option("--interval-ms", demo.intervalMs, "PLC pause between cycles")->check(CLI::Range(0, 60000));
+  demoCmd->add_option("--seed", demo.seed, "scene seed (default: the config's sim.seed)");
+  demoCmd->add_flag("--quiet", demo.quiet, "only the summary lines");
+  demoCmd->add_option("--scene", demo.scene, "with --method: part (textured plate, default) or multi (height levels)");
+  demoCmd->add_option("--method", demo.method, "run a job of this method taught on the textured part (moments, hu, sift, orb-ransac, orb-prosac, orb-adk, contour-weighted, shape)");
+  return demoCmd;
+}
+
+}  // namespace vgr::tools

@@ -18,7 +18,7 @@
 #include "core/result.hpp"
 #include "drivers/camera.hpp"
 
-namespace vgr::daemon {
+namespace vgr::drivers {
 
 struct CameraCounters {
   // Per grab() (one cycle): completed + failed + abandoned = grabs that reached the camera.
@@ -32,7 +32,7 @@ struct CameraCounters {
 
 class CameraWorker {
  public:
-  CameraWorker(config::CameraConfig config, std::unique_ptr<drivers::Camera> camera);
+  CameraWorker(config::CameraConfig config, std::unique_ptr<Camera> camera);
   ~CameraWorker();  // stops and joins
 
   void start();
@@ -42,8 +42,8 @@ class CameraWorker {
   // frame while the deadline allows) and waits for it until `deadline`. On success the
   // frame is swapped into `out` (no copy, no allocation once warm). `status`, if given,
   // receives the typed outcome (Ok, Timeout, Incomplete, Disconnected, ...).
-  Result<void> grab(drivers::Frame& out, std::chrono::steady_clock::time_point deadline,
-                    drivers::FrameStatus* status = nullptr);
+  Result<void> grab(Frame& out, std::chrono::steady_clock::time_point deadline,
+                    FrameStatus* status = nullptr);
 
   // Any thread: true while the camera is open and streaming.
   bool streaming() const;
@@ -59,7 +59,7 @@ class CameraWorker {
   void serve(std::uint64_t seq);  // acquisition thread: one request with its retries
 
   config::CameraConfig cfg_;
-  std::unique_ptr<drivers::Camera> camera_;
+  std::unique_ptr<Camera> camera_;
   const std::string describe_;
   std::thread thread_;
 
@@ -73,10 +73,10 @@ class CameraWorker {
   std::uint64_t abandonedSeq_ = 0;  // the requester gave up waiting for this one
   std::chrono::steady_clock::time_point requestDeadline_;
   Result<void> outcome_;
-  drivers::FrameStatus outcomeStatus_ = drivers::FrameStatus::Ok;
-  drivers::Frame frame_;            // filled by the acquisition thread, swapped out by grab()
+  FrameStatus outcomeStatus_ = FrameStatus::Ok;
+  Frame frame_;            // filled by the acquisition thread, swapped out by grab()
   CameraCounters counters_;
   int consecutiveTimeouts_ = 0;     // acquisition thread
 };
 
-}  // namespace vgr::daemon
+}  // namespace vgr::drivers

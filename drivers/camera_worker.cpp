@@ -1,21 +1,20 @@
-#include "daemon/camera_worker.hpp"
+#include "drivers/camera_worker.hpp"
 
 #include <algorithm>
 
 #include "core/log.hpp"
 
-namespace vgr::daemon {
+namespace vgr::drivers {
 
 using Clock = std::chrono::steady_clock;
 using std::chrono::milliseconds;
-using drivers::FrameStatus;
 
 namespace {
 // A re-trigger is only worth it with at least this much time left before the deadline.
 constexpr milliseconds kMinAttempt(20);
 }  // namespace
 
-CameraWorker::CameraWorker(config::CameraConfig config, std::unique_ptr<drivers::Camera> camera)
+CameraWorker::CameraWorker(config::CameraConfig config, std::unique_ptr<Camera> camera)
     : cfg_(std::move(config)), camera_(std::move(camera)), describe_(camera_->describe()) {}
 
 CameraWorker::~CameraWorker() { stop(); }
@@ -55,7 +54,7 @@ CameraCounters CameraWorker::counters() const {
   return counters_;
 }
 
-Result<void> CameraWorker::grab(drivers::Frame& out, Clock::time_point deadline, FrameStatus* status) {
+Result<void> CameraWorker::grab(Frame& out, Clock::time_point deadline, FrameStatus* status) {
   auto setStatus = [&](FrameStatus s) {
     if (status) *status = s;
   };
@@ -114,7 +113,7 @@ void CameraWorker::serve(std::uint64_t seq) {
     std::lock_guard lock(mutex_);
     deadline = requestDeadline_;
   }
-  drivers::Frame& target = frame_;  // only this thread touches frame_ between swaps
+  Frame& target = frame_;  // only this thread touches frame_ between swaps
   Result<void> r;
   FrameStatus st = FrameStatus::Ok;
   int attempt = 0;
@@ -133,7 +132,7 @@ void CameraWorker::serve(std::uint64_t seq) {
     counters_.retries++;
   }
 
-  const drivers::CameraStats ds = camera_->stats();
+  const CameraStats ds = camera_->stats();
   bool late;
   {
     std::lock_guard lock(mutex_);
@@ -179,7 +178,7 @@ void CameraWorker::run() {
       std::lock_guard lock(mutex_);
       if (stopping_) break;
     }
-    if (camera_->state() != drivers::CameraState::Streaming) {
+    if (camera_->state() != CameraState::Streaming) {
       const auto t0 = Clock::now();
       if (connect()) {
         {
@@ -223,4 +222,4 @@ void CameraWorker::run() {
   disconnect();
 }
 
-}  // namespace vgr::daemon
+}  // namespace vgr::drivers

@@ -1,5 +1,6 @@
-// Child processes for `vgr demo` and the tests: spawn with arguments, read their stdout
-// line by line, stop them with SIGTERM (then SIGKILL after a grace period).
+// Child processes for `vgr demo`, the benches and the tests: spawn with arguments, read
+// their stdout line by line, stop them with SIGTERM (then SIGKILL after a grace period).
+// POSIX only (posix_spawn); one owner per object, not thread-safe.
 #pragma once
 
 #include <sys/types.h>
@@ -9,7 +10,7 @@
 #include <string>
 #include <vector>
 
-namespace vgr::daemon {
+namespace vgr {
 
 class ChildProcess {
  public:
@@ -43,4 +44,4 @@ class ChildProcess {
   std::optional<int> status_;
 };
 
-}  // namespace vgr::daemon
+}  // namespace vgr

@@ -1,4 +1,4 @@
-#include "daemon/process.hpp"
+#include "core/child_process.hpp"
 
 #include <fcntl.h>
 #include <poll.h>
@@ -12,7 +12,7 @@
 
 extern char** environ;
 
-namespace vgr::daemon {
+namespace vgr {
 
 ChildProcess::~ChildProcess() {
   if (pid_ > 0 && !status_) stop(std::chrono::milliseconds(2000));
@@ -144,4 +144,4 @@ void ChildProcess::kill9() {
   wait(std::chrono::milliseconds(5000));
 }
 
-}  // namespace vgr::daemon
+}  // namespace vgr

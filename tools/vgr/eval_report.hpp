@@ -1,5 +1,5 @@
-// `vgr eval`: runs a job's method over a dataset (docs/datasets.md) and scores it against the
-// truth (docs/localization.md "Evaluation"). Offline tool code, one thread.
+// The scoring behind `vgr eval`: a job's method run over a dataset (docs/datasets.md) and
+// scored against the truth (docs/localization.md "Evaluation"). Offline tool code, one thread.
 #pragma once
 
 #include <optional>
@@ -8,7 +8,7 @@
 
 #include "core/result.hpp"
 
-namespace vgr::daemon {
+namespace vgr::tools {
 
 struct EvalOptions {
   std::string jobFolder;
@@ -46,4 +46,4 @@ std::string evalJson(const EvalReport& report, const EvalOptions& options);
 // Draws the sorted position and angle error curves (paper 000, Fig. 7) into a PNG.
 Result<void> plotErrors(const EvalReport& report, const EvalOptions& options, const std::string& path);
 
-}  // namespace vgr::daemon
+}  // namespace vgr::tools

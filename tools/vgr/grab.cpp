@@ -1,4 +1,4 @@
-#include "daemon/grab.hpp"
+#include "tools/vgr/grab.hpp"
 
 #include <arpa/inet.h>
 
@@ -11,16 +11,17 @@
 #include <thread>
 #include <vector>
 
+#include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "config/cell_config.hpp"
-#include "daemon/camera_worker.hpp"
 #include "drivers/aravis_camera.hpp"
 #include "drivers/camera.hpp"
+#include "drivers/camera_worker.hpp"
 
-namespace vgr::daemon {
+namespace vgr::tools {
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -96,7 +97,7 @@ int runGrab(const GrabOptions& o) {
   }
   (*made)->close();
 
-  CameraWorker worker(cam, std::move(*made));
+  drivers::CameraWorker worker(cam, std::move(*made));
   if (!o.saveFolder.empty()) {
     std::error_code ec;
     std::filesystem::create_directories(o.saveFolder, ec);
@@ -172,27 +173,22 @@ int runGrab(const GrabOptions& o) {
   return 0;
 }
 
-int runCameras(bool json) {
-  const auto list = drivers::discoverCameras();
-  if (json) {
-    std::printf("[");
-    for (std::size_t i = 0; i < list.size(); ++i) {
-      const auto& d = list[i];
-      std::printf("%s{\"serial\":\"%s\",\"model\":\"%s\",\"vendor\":\"%s\",\"address\":\"%s\",\"id\":\"%s\",\"protocol\":\"%s\"}",
-                  i ? "," : "", d.serial.c_str(), d.model.c_str(), d.vendor.c_str(), d.address.c_str(), d.id.c_str(),
-                  d.protocol.c_str());
-    }
-    std::printf("]\n");
-    return 0;
-  }
-  if (list.empty()) {
-    std::printf("no cameras found\n");
-    return 0;
-  }
-  std::printf("%-20s %-20s %-16s %-16s %s\n", "SERIAL", "MODEL", "VENDOR", "ADDRESS", "ID");
-  for (const auto& d : list)
-    std::printf("%-20s %-20s %-16s %-16s %s\n", d.serial.c_str(), d.model.c_str(), d.vendor.c_str(), d.address.c_str(), d.id.c_str());
-  return 0;
+CLI::App* GrabCommand::add(CLI::App& parent) {
+  auto& grab = options_;
+  auto* grabCmd = parent.add_subcommand("grab", "trigger N frames; report frames, typed errors and trigger->frame latency");
+  grabCmd->add_option("--camera", grab.camera, "IPv4 address, serial number or DeviceUserID");
+  grabCmd->add_option("--config", grab.configPath, "cell config whose camera section gives the features");
+  grabCmd->add_option("--count", grab.count, "number of triggers")->check(CLI::Range(1, 10000000));
+  grabCmd->add_option("--trigger", grab.trigger, "software, hardware or free_run (default: the config's, else software)");
+  grabCmd->add_option("--pixel-format", grab.pixelFormat, "Mono8, Mono10, Mono12, Mono16, BayerRG8, ...");
+  grabCmd->add_option("--packet-size", grab.packetSize, "GigE packet size in bytes (0 negotiates)")->check(CLI::Range(0, 65000));
+  grabCmd->add_option("--retries", grab.retries, "re-triggers after a lost frame within the deadline")->check(CLI::Range(0, 10));
+  grabCmd->add_option("--timeout-ms", grab.timeoutMs, "trigger -> frame timeout per attempt")->check(CLI::Range(50, 60000));
+  grabCmd->add_option("--deadline-ms", grab.deadlineMs, "trigger -> frame deadline incl. re-triggers (default: cycle_deadline_ms)")->check(CLI::Range(50, 600000));
+  grabCmd->add_option("--interval-ms", grab.intervalMs, "pause between triggers")->check(CLI::Range(0, 60000));
+  grabCmd->add_option("--save", grab.saveFolder, "write every frame received to this folder as frame_<frame id>.png");
+  grabCmd->add_flag("--json", grab.json, "JSON output; the last line is {\"frames\",\"ok\",\"errors\",\"p50_ms\",\"p99_ms\"}");
+  return grabCmd;
 }
 
-}  // namespace vgr::daemon
+}  // namespace vgr::tools

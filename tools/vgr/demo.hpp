@@ -6,7 +6,9 @@
 #include <cstdint>
 #include <string>
 
-namespace vgr::daemon {
+#include "tools/vgr/subcommand.hpp"
+
+namespace vgr::tools {
 
 struct DemoOptions {
   int cycles = 50;
@@ -27,4 +29,9 @@ struct DemoOptions {
 // was well-formed, 1 otherwise, 2 when the cell could not be started.
 int runDemo(const DemoOptions& options);
 
-}  // namespace vgr::daemon
+class DemoCommand final : public OptionsSubcommand<DemoOptions, runDemo> {
+ public:
+  CLI::App* add(CLI::App& parent) override;
+};
+
+}  // namespace vgr::tools

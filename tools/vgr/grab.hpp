@@ -1,9 +1,11 @@
-// `vgr grab` and `vgr cameras` (docs/cameras.md): the camera side of a cell, tried alone.
+// `vgr grab` (docs/cameras.md): the camera side of a cell, tried alone.
 #pragma once
 
 #include <string>
 
-namespace vgr::daemon {
+#include "tools/vgr/subcommand.hpp"
+
+namespace vgr::tools {
 
 struct GrabOptions {
   std::string camera;       // IPv4 address, serial number or DeviceUserID
@@ -20,13 +22,15 @@ struct GrabOptions {
   std::string saveFolder;   // if set: every frame received is written there as frame_<device frame id>.png
 };
 
-// Triggers `count` frames through the daemon's CameraWorker (re-trigger policy and
+// Triggers `count` frames through vgrd's CameraWorker (re-trigger policy and
 // reconnect included) and reports frames received, typed errors and trigger->frame latency
 // percentiles. Exit code: 0 when the run completed (errors are counted, not fatal), 1 when
 // the camera cannot be opened (the message names the camera and the setting), 2 on bad input.
 int runGrab(const GrabOptions& options);
 
-// Lists the cameras discovery finds (serial, model, address). Exit code 0.
-int runCameras(bool json);
+class GrabCommand final : public OptionsSubcommand<GrabOptions, runGrab> {
+ public:
+  CLI::App* add(CLI::App& parent) override;
+};
 
-}  // namespace vgr::daemon
+}  // namespace vgr::tools

@@ -1,4 +1,4 @@
-#include "daemon/locate_eval.hpp"
+#include "tools/vgr/eval_report.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -20,7 +20,7 @@
 #include "vision/calib/plane_model.hpp"
 #include "vision/locate/locator.hpp"
 
-namespace vgr::daemon {
+namespace vgr::tools {
 namespace {
 
 constexpr double kDegToRad = M_PI / 180.0;
@@ -300,4 +300,4 @@ Result<void> plotErrors(const EvalReport& r, const EvalOptions& o, const std::st
   return {};
 }
 
-}  // namespace vgr::daemon
+}  // namespace vgr::tools

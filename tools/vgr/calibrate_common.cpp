@@ -1,0 +1,42 @@
+#include "tools/vgr/calibrate_common.hpp"
+
+#include <algorithm>
+#include <cstdio>
+
+#include <CLI/CLI.hpp>
+
+namespace vgr::tools {
+namespace calib = vision::calib;
+
+void addPatternOptions(CLI::App& c, CalibPatternOptions& p) {
+  c.add_option("--pattern", p.pattern, "chessboard, circles (symmetric grid) or charuco");
+  c.add_option("--cols", p.cols, "inner corners (chessboard, charuco: squares - 1) / circles per row");
+  c.add_option("--rows", p.rows, "inner corners (chessboard, charuco: squares - 1) / circles per column");
+  c.add_option("--square", p.squareMm, "square size / circle spacing, mm");
+  c.add_option("--marker", p.markerMm, "charuco: ArUco marker side, mm (default 0.75 x square)");
+  c.add_option("--dict", p.dictionary, "charuco: ArUco dictionary, e.g. DICT_5X5_100 (default), DICT_4X4_50, DICT_6X6_250");
+}
+
+Result<calib::PatternSpec> patternSpec(const CalibPatternOptions& o) {
+  auto kind = calib::parsePatternKind(o.pattern);
+  if (!kind) return std::unexpected(kind.error());
+  calib::PatternSpec spec{*kind, o.cols, o.rows, o.squareMm};
+  spec.markerMm = o.markerMm > 0 ? o.markerMm : 0.75 * o.squareMm;
+  spec.dictionary = o.dictionary;
+  if (auto v = calib::validatePatternSpec(spec); !v) return std::unexpected(v.error());
+  return spec;
+}
+
+void progress(std::size_t i, std::size_t n, const std::string& name, const std::string& status) {
+  const int width = 20;
+  const int done = static_cast<int>(static_cast<double>(i) * width / static_cast<double>(std::max<std::size_t>(n, 1)));
+  std::fprintf(stderr, "[%s%s] %3zu/%zu %s: %s\n", std::string(static_cast<std::size_t>(done), '#').c_str(),
+               std::string(static_cast<std::size_t>(width - done), '-').c_str(), i, n, name.c_str(), status.c_str());
+}
+
+int bad(const std::string& msg) {
+  std::fprintf(stderr, "vgr calibrate: %s\n", msg.c_str());
+  return 2;
+}
+
+}  // namespace vgr::tools

@@ -1,0 +1,30 @@
+// `vgr calibrate handeye`: hand-eye from a folder of plate images + the robot poses in
+// poses.txt (docs/calibration.md).
+// Returns the process exit code: 0 ok, 2 bad input (message on stderr naming file / view / key).
+#pragma once
+
+#include <string>
+
+#include "tools/vgr/calibrate_common.hpp"
+#include "tools/vgr/subcommand.hpp"
+
+namespace vgr::tools {
+
+struct CalibHandEyeOptions {
+  std::string folder;          // holds poses.txt and the images it names
+  std::string intrinsics;      // intrinsics.yaml
+  std::string configuration = "auto";  // eye-in-hand | eye-to-hand | auto
+  CalibPatternOptions pattern;
+  std::string out = "handeye.yaml";
+  std::string truth;           // optional: a truth.yaml from `vgr calibrate synth` -> errors per method
+  bool json = false;
+};
+
+int runCalibrateHandEye(const CalibHandEyeOptions& o);
+
+class CalibrateHandEyeCommand final : public OptionsSubcommand<CalibHandEyeOptions, runCalibrateHandEye> {
+ public:
+  CLI::App* add(CLI::App& parent) override;
+};
+
+}  // namespace vgr::tools

@@ -1,0 +1,39 @@
+#include "tools/vgr/eval.hpp"
+
+#include <cstdio>
+
+#include <CLI/CLI.hpp>
+
+namespace vgr::tools {
+
+int runEval(const EvalCliOptions& options) {
+  const EvalOptions& o = options.scoring;
+  auto rep = evaluate(o);
+  if (!rep) return badInput(rep.error().message);
+  if (!o.plotPath.empty())
+    if (auto p = plotErrors(*rep, o, o.plotPath); !p) return badInput(p.error().message);
+  if (!options.json) {
+    std::printf("%s on %s: %d samples (%d parts, %d empty images), success %.1f %% at <= %.2f px / <= %.2f deg\n",
+                rep->method.c_str(), o.datasetFolder.c_str(), rep->n, rep->parts, rep->emptyImages, 100 * rep->successRate(),
+                o.posTolPx, o.angTolDeg);
+  }
+  std::printf("%s\n", evalJson(*rep, o).c_str());
+  return 0;
+}
+
+CLI::App* EvalCommand::add(CLI::App& parent) {
+  auto& e = options_.scoring;
+  auto* evalCmd = parent.add_subcommand("eval", "run a job's method over a dataset and score it (docs/localization.md)");
+  evalCmd->add_option("--job", e.jobFolder, "job folder")->required();
+  evalCmd->add_option("--dataset", e.datasetFolder, "dataset folder (truth.csv)")->required();
+  evalCmd->add_option("--method", e.method, "override the job's method");
+  evalCmd->add_option("--pos-tol", e.posTolPx, "success: position error <= PX")->check(CLI::Range(0.0, 1e6));
+  evalCmd->add_option("--ang-tol", e.angTolDeg, "success: angle error <= DEG")->check(CLI::Range(0.0, 180.0));
+  evalCmd->add_option("--match-tol", e.matchTolPx, "a feature match is correct within PX of its true place")->check(CLI::Range(0.0, 1e6));
+  evalCmd->add_option("--limit", e.limit, "first N images only")->check(CLI::Range(0, 100000000));
+  evalCmd->add_option("--plot", e.plotPath, "PNG of the sorted error curves (paper 000, Fig. 7)");
+  evalCmd->add_flag("--json", options_.json, "only the final JSON line");
+  return evalCmd;
+}
+
+}  // namespace vgr::tools

@@ -1,0 +1,103 @@
+#include "tools/vgr/locate.hpp"
+
+#include <chrono>
+#include <cstdio>
+#include <memory>
+
+#include <CLI/CLI.hpp>
+#include <fmt/core.h>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "config/cell_config.hpp"
+#include "config/job.hpp"
+#include "core/status.hpp"
+#include "core/pose.hpp"
+#include "daemon/cell_mapping.hpp"
+#include "vision/calib/pixel_mapping.hpp"
+#include "vision/locate/locator.hpp"
+#include "vision/part_poses.hpp"
+
+namespace vgr::tools {
+
+int runLocate(const LocateOptions& o) {
+  auto job = config::loadJob(o.job);
+  if (!job) return badInput(job.error().message);
+  const std::string method = o.method.empty() ? job->method : o.method;
+  const cv::Mat templ = cv::imread(job->templatePath(), cv::IMREAD_GRAYSCALE);
+  if (templ.empty()) return badInput(job->templatePath() + ": cannot read the template image");
+  const cv::Mat img = cv::imread(o.image, cv::IMREAD_GRAYSCALE);
+  if (img.empty()) return badInput(o.image + ": cannot read the image");
+  // With a calibration (a cell config), pixels map to the robot frame exactly as vgrd maps
+  // them: the mapping that cell selects (daemon/cell_mapping.hpp) and vision::partPoses.
+  std::unique_ptr<vision::calib::PixelMapping> mapping;
+  vision::PartPoseRules rules;
+  if (!job->calibration.empty()) {
+    auto cell = config::loadCellConfig(job->calibrationPath());
+    if (!cell) return badInput(cell.error().message);
+    auto m = daemon::makeCellMapping(*cell);
+    if (!m) return badInput(m.error().message);
+    mapping = std::move(*m);
+    if (const auto size = mapping->imageSize(); size && (size->width != img.cols || size->height != img.rows))
+      return badInput(fmt::format("{}: the calibration is for {}x{} px, {} is {}x{} px", job->calibrationPath(), size->width,
+                                  size->height, o.image, img.cols, img.rows));
+    rules.heightMm = job->partHeightMm;
+  }
+  auto locator = vision::makeLocator(method, templ, job->taught);
+  if (!locator) return badInput(locator.error().message);
+  const auto t0 = std::chrono::steady_clock::now();
+  auto out = (*locator)->locate(img);
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  nlohmann::ordered_json j;
+  if (!out) {
+    j["status"] = static_cast<int>(out.error().code);
+    j["error"] = out.error().message;
+    j["time_ms"] = ms;
+    j["parts"] = nlohmann::json::array();
+    std::printf("%s\n", j.dump().c_str());
+    return 1;
+  }
+  j["status"] = out->parts.empty() ? static_cast<int>(Status::NoPartFound) : static_cast<int>(Status::Ok);
+  j["method"] = method;
+  j["time_ms"] = ms;
+  j["parts"] = nlohmann::json::array();
+  for (const auto& d : out->parts) {
+    nlohmann::ordered_json p;
+    p["x_px"] = d.u;
+    p["y_px"] = d.v;
+    p["angle_deg"] = d.angleDeg;
+    p["score"] = d.score;
+    if (mapping) {
+      const auto parts = vision::partPoses({d}, *mapping, rules);
+      if (!parts.empty()) {
+        const Pose& pose = parts.front().pose;
+        p["x_mm"] = pose.x;
+        p["y_mm"] = pose.y;
+        p["z_mm"] = pose.z;
+        p["rz_deg"] = toEulerZyxDeg(pose).rz;
+      }
+    }
+    j["parts"].push_back(p);
+  }
+  if (o.json) {
+    std::printf("%s\n", j.dump().c_str());
+  } else {
+    std::printf("%s: %zu part(s) in %.1f ms (%s)\n", o.image.c_str(), out->parts.size(), ms, method.c_str());
+    for (const auto& d : out->parts)
+      std::printf("  x %.2f px  y %.2f px  angle %.2f deg  score %.3f\n", d.u, d.v, d.angleDeg, d.score);
+  }
+  return 0;
+}
+
+CLI::App* LocateCommand::add(CLI::App& parent) {
+  auto& l = options_;
+  auto* locateCmd = parent.add_subcommand("locate", "run a job's method on one image");
+  locateCmd->add_option("--job", l.job, "job folder")->required();
+  locateCmd->add_option("--image", l.image, "image file")->required();
+  locateCmd->add_option("--method", l.method, "override the job's method");
+  locateCmd->add_flag("--json", l.json, "one JSON object: status, time_ms, parts");
+  return locateCmd;
+}
+
+}  // namespace vgr::tools

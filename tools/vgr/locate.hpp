@@ -1,0 +1,25 @@
+// `vgr locate`: runs a job's method on one image (docs/localization.md). With the job's
+// calibration (a cell config's `model`) each part also gets robot coordinates (mm, deg).
+// Exit code 0 (parts or none), 1 when the method fails (status and error in the JSON),
+// 2 on bad input (message on stderr).
+#pragma once
+
+#include <string>
+
+#include "tools/vgr/subcommand.hpp"
+
+namespace vgr::tools {
+
+struct LocateOptions {
+  std::string job, image, method;
+  bool json = false;
+};
+
+int runLocate(const LocateOptions& o);
+
+class LocateCommand final : public OptionsSubcommand<LocateOptions, runLocate> {
+ public:
+  CLI::App* add(CLI::App& parent) override;
+};
+
+}  // namespace vgr::tools

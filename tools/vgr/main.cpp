@@ -1,0 +1,90 @@
+// vgr: the offline tool. Subcommands, one file each in tools/vgr/:
+//   vgr demo [--cycles N]     run the simulated cell end to end (docs/demo.md)
+//   vgr check --config FILE   validate a cell config
+//   vgr cameras [--json]      list the GigE Vision cameras on the network (docs/cameras.md)
+//   vgr grab --camera ID ...  trigger N frames, report errors and latency (docs/cameras.md)
+//   vgr calibrate intrinsics|handeye|plane|synth ...   calibration (docs/calibration.md)
+//   vgr sim render | teach | locate | eval   localization datasets, jobs, runs (docs/localization.md)
+#include <map>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "tools/vgr/calibrate_handeye.hpp"
+#include "tools/vgr/calibrate_intrinsics.hpp"
+#include "tools/vgr/calibrate_plane.hpp"
+#include "tools/vgr/calibrate_synth.hpp"
+#include "tools/vgr/cameras.hpp"
+#include "tools/vgr/check.hpp"
+#include "tools/vgr/demo.hpp"
+#include "tools/vgr/eval.hpp"
+#include "tools/vgr/grab.hpp"
+#include "tools/vgr/locate.hpp"
+#include "tools/vgr/sim_render.hpp"
+#include "tools/vgr/subcommand.hpp"
+#include "tools/vgr/teach.hpp"
+
+namespace {
+
+using vgr::tools::Subcommand;
+
+// Subcommands that only group others (`vgr calibrate intrinsics`, `vgr sim render`).
+struct Group {
+  const char* name;
+  const char* description;
+};
+constexpr Group kGroups[] = {
+    {"calibrate", "camera intrinsics, hand-eye, synthetic calibration data"},
+    {"sim", "simulation tools"},
+};
+
+struct Entry {
+  const char* group;  // nullptr: a top-level subcommand; else one of kGroups
+  std::unique_ptr<Subcommand> command;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  namespace tools = vgr::tools;
+  CLI::App app{"vgr: vision-guided robotics tool"};
+  app.require_subcommand(1);
+
+  // Every subcommand, in the order `vgr --help` lists them.
+  Entry table[] = {
+      {nullptr, std::make_unique<tools::DemoCommand>()},
+      {nullptr, std::make_unique<tools::CheckCommand>()},
+      {nullptr, std::make_unique<tools::CamerasCommand>()},
+      {nullptr, std::make_unique<tools::GrabCommand>()},
+      {"calibrate", std::make_unique<tools::CalibrateIntrinsicsCommand>()},
+      {"calibrate", std::make_unique<tools::CalibrateHandEyeCommand>()},
+      {"calibrate", std::make_unique<tools::CalibratePlaneCommand>()},
+      {"calibrate", std::make_unique<tools::CalibrateSynthCommand>()},
+      {"sim", std::make_unique<tools::SimRenderCommand>()},
+      {nullptr, std::make_unique<tools::TeachCommand>()},
+      {nullptr, std::make_unique<tools::LocateCommand>()},
+      {nullptr, std::make_unique<tools::EvalCommand>()},
+  };
+
+  std::map<std::string, CLI::App*> groups;  // added when their first member is
+  auto groupApp = [&](const std::string& name) {
+    CLI::App*& g = groups[name];
+    if (!g)
+      for (const auto& k : kGroups)
+        if (name == k.name) {
+          g = app.add_subcommand(k.name, k.description);
+          g->require_subcommand(1);
+        }
+    return g;
+  };
+  std::vector<std::pair<CLI::App*, Subcommand*>> added;
+  for (auto& e : table) added.emplace_back(e.command->add(e.group ? *groupApp(e.group) : app), e.command.get());
+
+  CLI11_PARSE(app, argc, argv);
+  for (const auto& [cli, command] : added)
+    if (*cli) return command->run();
+  return 0;
+}
