@@ -5,10 +5,15 @@
 // from any thread; the TriggerHandler runs on the Modbus thread. One mutex guards the map:
 // every client request is answered and its handshake logic run under it, so a reader never
 // sees half a result.
-// Clients: up to maxClients at once (more are accepted and closed at once). A client that
-// disconnects, sends a malformed frame (protocol id != 0, inconsistent length, unparsable)
-// or stalls mid-frame (> 200 ms between bytes) is dropped; the others are not disturbed.
-// Writes outside HR 0..15 get exception 02 (illegal data address); any unit id is served.
+// Clients: up to maxClients at once (more are accepted and closed at once). Reads never
+// block: each connection's bytes are buffered and every complete request in them answered
+// (framed by the MBAP header), so a client that dribbles bytes holds only itself. A client
+// that disconnects, sends a malformed frame (protocol id != 0, MBAP length outside
+// [2, 254] or inconsistent with its function code) or does not complete a request within
+// 500 ms of its first byte is dropped; the others are not disturbed.
+// Writes outside HR 0..15 get exception 02 (illegal data address); function codes other
+// than FC01-06, 15, 16, 22, 23 (FC17 included) get exception 01 (illegal function) and the
+// connection stays; any unit id is served.
 #pragma once
 
 #include <chrono>
