@@ -11,7 +11,7 @@
 #include <functional>
 #include <memory>
 #include <string>
-
+#include <type_traits>
 #include <vector>
 
 #include "core/result.hpp"
@@ -51,12 +51,44 @@ struct StrictOutcome {
 // Called on the I/O thread after every strict exchange (after the log line).
 using StrictOutcomeFn = std::function<void(const std::string& robotName, const StrictOutcome& outcome)>;
 
+// Told, on the I/O thread, whether a reply reached the robot: true once it was written to
+// the connection (for a robot that had closed its sending side: and the robot did not
+// reset the connection on it within 50 ms, i.e. it still reads); false when it was not
+// (the connection closed or was replaced before, the write failed or timed out, the robot
+// reset on it, the server stopped). Called exactly once per reply that has one.
+using WrittenFn = std::function<void(bool written)>;
+
 // Sends the reply to the request it was handed for. Call exactly once, on the I/O thread
 // (a call from another thread is marshalled to the I/O thread, but do not rely on it).
-// Later calls, and calls after the connection closed or the server stopped, are ignored.
-// If every copy is destroyed without a call, the robot gets status INTERNAL (-8), so a
-// handler bug never leaves a robot waiting.
-using ReplyFn = std::function<void(const RobotReply&)>;
+// Later calls, and calls after the connection closed or the server stopped, are ignored
+// (their WrittenFn gets false). If every copy is destroyed without a call, the robot gets
+// status INTERNAL (-8), so a handler bug never leaves a robot waiting. A caller that must
+// know whether the robot got the reply (ResultStore: a part counts as delivered only then)
+// passes a WrittenFn; any callable taking (const RobotReply&) converts to a ReplyFn.
+class ReplyFn {
+ public:
+  using Fn = std::function<void(const RobotReply&, WrittenFn)>;
+  ReplyFn() = default;
+  template <class F>
+    requires(std::is_invocable_v<F&, const RobotReply&> && !std::is_same_v<std::decay_t<F>, ReplyFn>)
+  ReplyFn(F f)  // NOLINT(google-explicit-constructor): handlers pass lambdas
+      : fn_([f = std::move(f)](const RobotReply& r, const WrittenFn& written) mutable {
+          f(r);
+          if (written) written(true);
+        }) {}
+  static ReplyFn withCompletion(Fn fn) {
+    ReplyFn r;
+    r.fn_ = std::move(fn);
+    return r;
+  }
+  void operator()(const RobotReply& reply, WrittenFn written = {}) const {
+    if (fn_) fn_(reply, std::move(written));
+  }
+  explicit operator bool() const { return static_cast<bool>(fn_); }
+
+ private:
+  Fn fn_;
+};
 
 // Called on the I/O thread for each well-formed request, one at a time per connection
 // (the next request of the same connection waits for this one's reply). Must not block:
