@@ -159,6 +159,7 @@ Result<void> VgrdApp::start() {
     ep.port = rc.port;
     ep.maxClients = static_cast<std::size_t>(rc.maxClients);
     ep.allowedClients = rc.allowedClients;
+    ep.idleTimeoutMs = rc.idleTimeoutMs;
     ep.strict.command = rc.strict.command;
     ep.strict.ready = rc.strict.ready;
     ep.strict.done = rc.strict.done;

@@ -58,6 +58,7 @@ struct ModbusServer::Impl {
     std::string peer;
     std::vector<std::uint8_t> pending;  // bytes of the request(s) not yet complete
     Clock::time_point frameStart{};     // when the first byte of `pending` arrived
+    Clock::time_point lastActivity{};   // when bytes last arrived (or it connected)
   };
 
   Impl(ModbusOptions o, TriggerHandler h) : options(std::move(o)), onTrigger(std::move(h)), map(options.floatOrder) {
@@ -77,6 +78,7 @@ struct ModbusServer::Impl {
   int listenFd = -1;
   std::array<int, 2> wakePipe{-1, -1};
   std::vector<Client> clients;
+  std::vector<in_addr> allowed;  // options.allowedClients, parsed
   std::uint16_t boundPort = 0;
   std::thread thread;
 
@@ -97,6 +99,14 @@ Result<void> ModbusServer::Impl::start() {
   const std::string where = options.bind + ":" + std::to_string(options.port);
   if (options.maxClients < 1 || options.maxClients > 64) {
     return fail(Status::BadArgument, "modbus: maxClients " + std::to_string(options.maxClients) + " outside [1, 64]");
+  }
+  allowed.clear();
+  for (const auto& a : options.allowedClients) {
+    in_addr ip{};
+    if (inet_pton(AF_INET, a.c_str(), &ip) != 1) {
+      return fail(Status::BadArgument, "modbus: allowed client '" + a + "' is not a numeric IPv4 address");
+    }
+    allowed.push_back(ip);
   }
   sockaddr_in addr{};
   addr.sin_family = AF_INET;
@@ -127,7 +137,9 @@ Result<void> ModbusServer::Impl::start() {
   }
 
   thread = std::thread([this] { run(); });
-  log::info("modbus", "listening on {}:{} (max {} clients, floats {})", options.bind, boundPort, options.maxClients,
+  log::info("modbus", "listening on {}:{} (max {} clients, idle timeout {} ms, {} allowed, floats {})", options.bind,
+            boundPort, options.maxClients, options.idleTimeout.count(),
+            allowed.empty() ? std::string("any client") : std::to_string(allowed.size()) + " addresses",
             options.floatOrder == WordOrder::HighWordFirst ? "high word first" : "low word first");
   return {};
 }
@@ -171,6 +183,12 @@ void ModbusServer::Impl::acceptClient() {
     return;
   }
   const std::string peer = peerName(addr);
+  if (!allowed.empty() && std::none_of(allowed.begin(), allowed.end(),
+                                       [&](const in_addr& a) { return a.s_addr == addr.sin_addr.s_addr; })) {
+    ::close(fd);
+    log::warn("modbus", "client {} refused: not in allowed_clients", peer);
+    return;
+  }
   if (std::ssize(clients) >= options.maxClients) {
     ::close(fd);
     log::warn("modbus", "client {} refused: already {} clients", peer, clients.size());
@@ -180,7 +198,7 @@ void ModbusServer::Impl::acceptClient() {
   setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
   timeval sendTimeout{0, kSendTimeoutMs * 1000};
   setsockopt(fd, SOL_SOCKET, SO_SNDTIMEO, &sendTimeout, sizeof sendTimeout);
-  clients.push_back(Client{fd, peer, {}, {}});
+  clients.push_back(Client{fd, peer, {}, {}, Clock::now()});
   log::info("modbus", "client {} connected ({} connected)", peer, clients.size());
 }
 
@@ -213,7 +231,8 @@ bool ModbusServer::Impl::serveClient(Client& c) {
     closeClient(c, errno == ECONNRESET ? std::string("closed by peer") : "receive failed: " + errnoText(errno));
     return false;
   }
-  if (c.pending.empty()) c.frameStart = Clock::now();
+  c.lastActivity = Clock::now();
+  if (c.pending.empty()) c.frameStart = c.lastActivity;
   c.pending.insert(c.pending.end(), buf.begin(), buf.begin() + n);
 
   std::size_t used = 0;
@@ -261,6 +280,8 @@ void ModbusServer::Impl::dropStalled(Clock::time_point now) {
   for (auto& c : clients) {
     if (c.fd >= 0 && !c.pending.empty() && now - c.frameStart >= kFrameTimeout) {
       closeClient(c, "stalled mid-frame (request incomplete after " + std::to_string(kFrameTimeout.count()) + " ms)");
+    } else if (c.fd >= 0 && options.idleTimeout.count() > 0 && now - c.lastActivity >= options.idleTimeout) {
+      closeClient(c, "idle for " + std::to_string(options.idleTimeout.count()) + " ms");
     }
   }
 }
@@ -276,6 +297,7 @@ void ModbusServer::Impl::run() {
     auto wakeAt = nextBeat;
     for (const auto& c : clients) {
       if (!c.pending.empty()) wakeAt = std::min(wakeAt, c.frameStart + kFrameTimeout);
+      if (options.idleTimeout.count() > 0) wakeAt = std::min(wakeAt, c.lastActivity + options.idleTimeout);
     }
     {
       std::lock_guard lock(mutex);

@@ -133,6 +133,8 @@ class Session : public std::enable_shared_from_this<Session> {
 
   void close(std::string_view reason);
   bool closed() const { return closed_; }
+  // When the robot last sent a byte (or the connection opened, or a reply was written).
+  std::chrono::steady_clock::time_point lastActivity() const { return lastActivity_; }
   const asio::ip::address& address() const { return address_; }
   asio::io_context::executor_type executor() { return server_->io.get_executor(); }
 
@@ -185,6 +187,7 @@ class Session : public std::enable_shared_from_this<Session> {
   std::array<char, kReadChunkBytes> readBuf_{};
   std::string outgoing_;  // the bytes being written
   WrittenFn written_;     // of the handler's reply being written, if it asked
+  std::chrono::steady_clock::time_point lastActivity_ = std::chrono::steady_clock::now();
   std::uint64_t seq_ = 0;  // number of the request handed to the handler
   std::uint64_t writeGen_ = 0;
   std::uint64_t replies_ = 0;
@@ -205,7 +208,10 @@ class RequestSession final : public Session {
                  asio::ip::address address)
       : Session(std::move(socket), server, id, std::move(peer), std::move(address)), decoder_(server->endpoint.dialect) {}
 
-  void start() override { advance(); }
+  void start() override {
+    armIdleTimer();
+    advance();
+  }
 
   void deliverAwaited(const RobotReply& reply) override {
     awaitingReply_ = false;
@@ -269,11 +275,33 @@ class RequestSession final : public Session {
       close(ec.message());
       return;
     }
+    lastActivity_ = std::chrono::steady_clock::now();
     decoder_.append(std::string_view(readBuf_.data(), n));
     advance();
   }
 
+  // endpoint.idleTimeoutMs: close a connection silent that long with nothing in progress.
+  void armIdleTimer() {
+    const int ms = server_->endpoint.idleTimeoutMs;
+    if (ms <= 0) return;
+    const auto now = std::chrono::steady_clock::now();
+    const bool busy = awaitingReply_ || writing_ || !inbox_.empty();
+    const auto due = lastActivity_ + std::chrono::milliseconds(ms);
+    idleTimer_.expires_at(busy || due <= now ? now + std::chrono::milliseconds(ms) : due);
+    idleTimer_.async_wait([self = shared_from_this(), this, ms](const error_code& ec) {
+      if (ec || closed_) return;
+      const bool idle = !awaitingReply_ && !writing_ && inbox_.empty() &&
+                        std::chrono::steady_clock::now() - lastActivity_ >= std::chrono::milliseconds(ms);
+      if (idle) {
+        close("idle for " + std::to_string(ms) + " ms (idle_timeout_ms)");
+        return;
+      }
+      armIdleTimer();
+    });
+  }
+
   void onWritten() override {
+    lastActivity_ = std::chrono::steady_clock::now();
     if (!peerEof_ || !written_) {
       settleWritten(true);
       advance();
@@ -299,10 +327,14 @@ class RequestSession final : public Session {
     return info.tcpi_state == TCP_CLOSE || err != 0;
   }
 
-  void onClosing() override { probeTimer_.cancel(); }
+  void onClosing() override {
+    probeTimer_.cancel();
+    idleTimer_.cancel();
+  }
 
   RequestDecoder decoder_;
   asio::steady_timer probeTimer_{server_->io};
+  asio::steady_timer idleTimer_{server_->io};
   std::deque<Result<RobotRequest>> inbox_;  // parsed requests and error replies, in order
   bool peerEof_ = false;
 };
@@ -390,6 +422,7 @@ class StrictSession final : public Session {
       close(ec == asio::error::eof ? std::string("peer closed the connection") : ec.message());
       return;
     }
+    lastActivity_ = std::chrono::steady_clock::now();
     exchange_.feed(std::string_view(readBuf_.data(), n));
     for (;;) {
       StrictExchange::Event e = exchange_.poll();
@@ -562,14 +595,12 @@ void ServerCore::onAccept(const error_code& ec, tcp::socket socket) {
     return;
   }
   if (sessions.size() >= endpoint.maxClients) {
-    // Full: a reconnecting robot replaces its own oldest (stale) connection.
+    // Full: a reconnecting robot replaces its own stalest connection (silent the longest;
+    // a rebooted controller's old socket is older than any live one's last request).
     std::shared_ptr<Session> stale;
     for (auto& [sid, weak] : sessions) {
       auto s = weak.lock();
-      if (s && s->address() == address) {
-        stale = std::move(s);
-        break;  // the map is ordered by id: this is the oldest
-      }
+      if (s && s->address() == address && (!stale || s->lastActivity() < stale->lastActivity())) stale = std::move(s);
     }
     if (stale) {
       stale->close("replaced by a new connection from the same address");

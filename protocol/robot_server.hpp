@@ -30,12 +30,16 @@ struct RobotEndpoint {
   std::string bind = "127.0.0.1";  // IP address ("0.0.0.0" / "::" for all) or host name
   std::uint16_t port = 0;          // 0 = ephemeral (tests); see RobotServer::port()
   // Open connections at most. When full, a new connection from an address that already
-  // has one replaces the oldest such connection (a robot that rebooted or re-ran its
-  // program leaves a stale socket behind); from any other address it is closed at once.
+  // has one replaces the one of them silent the longest (a robot that rebooted or re-ran
+  // its program leaves a stale socket behind); from any other address it is closed at once.
   std::size_t maxClients = 8;
   // Peer IP addresses allowed to connect (numeric, v4 or v6); empty = anyone. Others are
   // closed at once with a warning.
   std::vector<std::string> allowedClients;
+  // Request dialects: a connection with no byte from the robot for this long, and no
+  // request in progress, is closed (ms; 0 = never). Not applied to the strict dialect
+  // (vgrd speaks first there; its step timeout covers a silent robot).
+  int idleTimeoutMs = 0;
   // Strict dialect only: the tokens and the time each step may take (ms, > 0).
   StrictTokens strict;
   int stepTimeoutMs = 10000;

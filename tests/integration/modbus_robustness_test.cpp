@@ -34,7 +34,14 @@ using namespace modbus;
 using Clock = std::chrono::steady_clock;
 
 struct RawSocket {
-  explicit RawSocket(std::uint16_t port) : fd(::socket(AF_INET, SOCK_STREAM, 0)) {
+  // `from`: the local address to connect from (any 127.x.y.z works on loopback).
+  explicit RawSocket(std::uint16_t port, const char* from = nullptr) : fd(::socket(AF_INET, SOCK_STREAM, 0)) {
+    if (from != nullptr && fd >= 0) {
+      sockaddr_in l{};
+      l.sin_family = AF_INET;
+      inet_pton(AF_INET, from, &l.sin_addr);
+      ::bind(fd, reinterpret_cast<sockaddr*>(&l), sizeof l);
+    }
     sockaddr_in a{};
     a.sin_family = AF_INET;
     a.sin_port = htons(port);
@@ -99,7 +106,7 @@ struct LibmodbusClient {
 class modbus_robustness : public ::testing::Test {
  protected:
   void startServer(ModbusOptions options = {}) {
-    options.bind = "127.0.0.1";
+    if (options.bind != "0.0.0.0") options.bind = "127.0.0.1";
     options.port = 0;
     server_ = std::make_unique<ModbusServer>(options, [this](int) { return ++cycles_; });
     auto started = server_->start();
@@ -272,6 +279,64 @@ TEST_F(modbus_robustness, LyingLengthAndStalledFramesAreDropped) {
   const auto t0 = Clock::now();
   EXPECT_TRUE(stalled.closedWithin(2000ms));
   EXPECT_LT(Clock::now() - t0, 1000ms);
+}
+
+const std::string kReadStatus("\x00\x01\x00\x00\x00\x06\x01\x04\x00\x10\x00\x01", 12);
+
+// Idle connections do not hold the slots: with max_clients 2 and an idle timeout of
+// 300 ms, two silent connections are closed after it and a new PLC gets in, while a PLC
+// polling every 100 ms is never dropped.
+TEST_F(modbus_robustness, IdleConnectionsAreClosedAfterTheIdleTimeout) {
+  ModbusOptions o;
+  o.maxClients = 3;
+  o.idleTimeout = 300ms;
+  startServer(o);
+  RawSocket poller(port_);
+  RawSocket idle1(port_), idle2(port_);
+  ASSERT_TRUE(poller.connected && idle1.connected && idle2.connected);
+  std::this_thread::sleep_for(50ms);
+  {
+    RawSocket refused(port_);  // full
+    EXPECT_TRUE(refused.closedWithin(1000ms));
+  }
+  const auto t0 = Clock::now();
+  while (Clock::now() - t0 < 800ms) {
+    ASSERT_TRUE(poller.send(kReadStatus));
+    ASSERT_EQ(poller.recvSome(500ms).size(), 11u) << "a polling PLC is not idle";
+    std::this_thread::sleep_for(100ms);
+  }
+  EXPECT_TRUE(idle1.closedWithin(100ms));
+  EXPECT_TRUE(idle2.closedWithin(100ms));
+  RawSocket next(port_);
+  ASSERT_TRUE(next.connected);
+  ASSERT_TRUE(next.send(kReadStatus));
+  EXPECT_EQ(next.recvSome(1000ms).size(), 11u) << "the freed slot serves a new PLC";
+}
+
+// modbus.allowed_clients: other addresses are closed at once, listed ones served.
+TEST_F(modbus_robustness, OnlyAllowedClientsAreServed) {
+  ModbusOptions o;
+  o.bind = "0.0.0.0";
+  o.allowedClients = {"127.0.0.2"};
+  startServer(o);
+  RawSocket stranger(port_, "127.0.0.1");
+  ASSERT_TRUE(stranger.connected);
+  stranger.send(kReadStatus);
+  EXPECT_TRUE(stranger.closedWithin(1000ms));
+  RawSocket plc(port_, "127.0.0.2");
+  ASSERT_TRUE(plc.connected);
+  ASSERT_TRUE(plc.send(kReadStatus));
+  EXPECT_EQ(plc.recvSome(1000ms).size(), 11u);
+}
+
+TEST_F(modbus_robustness, BadAllowedClientFailsStart) {
+  ModbusOptions o;
+  o.port = 0;
+  o.allowedClients = {"plc.local"};
+  ModbusServer server(o, [](int) { return 1u; });
+  const auto r = server.start();
+  ASSERT_FALSE(r.has_value());
+  EXPECT_NE(r.error().message.find("plc.local"), std::string::npos) << r.error().message;
 }
 
 }  // namespace
