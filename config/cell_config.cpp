@@ -106,6 +106,19 @@ void parseModbus(Section s, ModbusConfig& m) {
                       "one of: high_word_first, low_word_first");
   m.floatWordOrder = order == "high_word_first" ? WordOrder::HighWordFirst : WordOrder::LowWordFirst;
   s.read<int>("max_clients", m.maxClients, inRange(1, 64), "[1, 64]");
+  s.read<int>("idle_timeout_ms", m.idleTimeoutMs, inRange(0, 86400000), "[0, 86400000]");
+  const YAML::Node allowed = s.get("allowed_clients");
+  if (allowed && !allowed.IsNull()) {
+    if (!allowed.IsSequence()) s.fail(allowed, "allowed_clients", "expected a list of IPv4 addresses");
+    for (std::size_t i = 0; i < allowed.size(); ++i) {
+      const std::string key = "allowed_clients[" + std::to_string(i) + "]";
+      const std::string text = allowed[i].IsScalar() ? allowed[i].Scalar() : std::string("<non-scalar>");
+      unsigned char buf[4];
+      if (!allowed[i].IsScalar() || ::inet_pton(AF_INET, text.c_str(), buf) != 1)
+        s.fail(allowed[i], key, "expected a numeric IPv4 address, got '" + text + "'");
+      m.allowedClients.push_back(text);
+    }
+  }
   s.read<bool>("require_trigger_enable", m.requireTriggerEnable);
 
   Section c(s.file(), s.get("client"), s.join("client"));
@@ -172,6 +185,7 @@ void parseRobot(Section s, RobotConfig& r) {
   s.read<int>("reply_deadline_ms", r.replyDeadlineMs, inRange(50, 60000), "[50, 60000]");
   s.read<int>("job", r.job, inRange(1, 32767), "[1, 32767]");
   s.read<int>("max_clients", r.maxClients, inRange(1, 64), "[1, 64]");
+  s.read<int>("idle_timeout_ms", r.idleTimeoutMs, inRange(0, 86400000), "[0, 86400000]");
 
   const YAML::Node allowed = s.get("allowed_clients");
   if (allowed && !allowed.IsNull()) {

@@ -97,6 +97,8 @@ struct ModbusConfig {
   std::uint16_t port = 1502;
   WordOrder floatWordOrder = WordOrder::HighWordFirst;
   int maxClients = 8;                 // [1, 64]: PLC connections served at once
+  int idleTimeoutMs = 60000;          // ms, [0, 86400000]: a silent PLC connection is closed; 0 = never
+  std::vector<std::string> allowedClients;  // numeric IPv4 addresses; empty = anyone
   bool requireTriggerEnable = false;  // true: triggers count only while CONTROL b3 is set
   ModbusClientConfig client;          // modbus.client
 };
@@ -121,6 +123,7 @@ struct RobotConfig {
                                // until the robot sends "JOB,<n>".
   int maxClients = 8;          // [1, 64]: a new connection from the same address replaces the oldest when full
   std::vector<std::string> allowedClients;  // numeric IP addresses; empty = anyone
+  int idleTimeoutMs = 0;       // ms, [0, 86400000]: a connection without a request is closed; 0 = never
   PartOrder partOrder = PartOrder::BestScore;
   int label = 0;               // [0, 32767]: the one label served with part_order label_only
   StrictConfig strict;         // dialect strict only

@@ -111,6 +111,13 @@ void CycleRunner::stop() {
   if (thread_.joinable()) thread_.join();
 }
 
+std::uint32_t firstCycleIdAfter(std::uint32_t last) { return last == 0 || last >= kMaxCycleId ? 1 : last + 1; }
+
+void CycleRunner::setFirstCycleId(std::uint32_t id) {
+  std::lock_guard lock(mutex_);
+  nextCycleId_ = id == 0 || id > kMaxCycleId ? 1 : id;
+}
+
 std::uint32_t CycleRunner::submit(int jobId, TriggerSource source) {
   // JOB_ID 0 (a PLC that never wrote HR1) runs the cell's first job.
   if (jobId == 0 && !cell_.jobs.empty()) jobId = cell_.jobs.front().id;

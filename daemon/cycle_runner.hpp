@@ -40,6 +40,10 @@ struct CycleSinks {
   std::function<void(const CycleResult&)> onResult;
 };
 
+// The cycle id after `last` (0: none yet): last + 1, wrapping to 1 after kMaxCycleId
+// (ids stay below 2^23, core/cycle.hpp).
+std::uint32_t firstCycleIdAfter(std::uint32_t last);
+
 class CycleRunner {
  public:
   static constexpr std::size_t kQueueCapacity = 4;
@@ -59,6 +63,10 @@ class CycleRunner {
   std::uint32_t submit(int jobId, TriggerSource source);
 
   std::uint64_t overruns() const { return overruns_.load(); }
+
+  // Before start(): the id of the first cycle (vgrd: firstCycleIdAfter(the journal's last
+  // cycle), so ids do not repeat across restarts). Outside [1, kMaxCycleId]: 1.
+  void setFirstCycleId(std::uint32_t id);
 
  private:
   struct Trigger {

@@ -1,24 +1,86 @@
 #include "daemon/journal.hpp"
 
+#include <algorithm>
 #include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <vector>
+
+#include <fcntl.h>
+#include <unistd.h>
 
 #include <nlohmann/json.hpp>
 
+#include "core/log.hpp"
+
 namespace vgr::daemon {
 
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr std::uintmax_t kTailBytes = 64 * 1024;  // read back to find the last line
+
+// The cycle id of the last parsable line in `tail` (complete lines only), 0 if none.
+std::uint32_t lastCycleIn(const std::string& tail) {
+  std::size_t end = tail.size();
+  while (end > 0) {
+    const std::size_t nl = tail.rfind('\n', end - 1);
+    const std::size_t begin = nl == std::string::npos ? 0 : nl + 1;
+    if (end > begin) {
+      const auto j = nlohmann::json::parse(tail.substr(begin, end - begin), nullptr, false);
+      if (j.is_object() && j.contains("cycle") && j["cycle"].is_number_unsigned()) return j["cycle"].get<std::uint32_t>();
+    }
+    if (nl == std::string::npos) break;
+    end = nl;
+  }
+  return 0;
+}
+
+}  // namespace
+
 Journal::~Journal() {
-  if (file_) std::fclose(file_);
+  if (fd_ >= 0) ::close(fd_);
 }
 
 Result<void> Journal::open(const std::string& path) {
   std::error_code ec;
-  const auto parent = std::filesystem::path(path).parent_path();
-  if (!parent.empty()) std::filesystem::create_directories(parent, ec);
-  file_ = std::fopen(path.c_str(), "a");
-  if (!file_) return fail(Status::BadArgument, "journal " + path + ": " + std::strerror(errno));
+  const auto parent = fs::path(path).parent_path();
+  if (!parent.empty()) fs::create_directories(parent, ec);
+  path_ = path;
+  // A torn last line: set it apart, keep every complete line.
+  if (fs::is_regular_file(path, ec) && fs::file_size(path, ec) > 0 && !ec) {
+    const std::uintmax_t size = fs::file_size(path, ec);
+    const std::uintmax_t from = size > kTailBytes ? size - kTailBytes : 0;
+    std::string tail(static_cast<std::size_t>(size - from), '\0');
+    {
+      std::ifstream in(path, std::ios::binary);
+      in.seekg(static_cast<std::streamoff>(from));
+      in.read(tail.data(), static_cast<std::streamsize>(tail.size()));
+      if (!in) return fail(Status::BadArgument, "journal " + path + ": cannot read it back: " + std::strerror(errno));
+    }
+    if (tail.back() != '\n') {
+      const std::size_t nl = tail.rfind('\n');
+      const std::size_t keep = nl == std::string::npos ? 0 : nl + 1;
+      if (nl == std::string::npos && from > 0) {
+        return fail(Status::BadArgument, "journal " + path + ": last 64 KiB hold no line end; not repaired");
+      }
+      const auto now = std::chrono::duration_cast<std::chrono::seconds>(std::chrono::system_clock::now().time_since_epoch());
+      const std::string tornPath = path + ".torn-" + std::to_string(now.count());
+      std::ofstream(tornPath, std::ios::binary | std::ios::app).write(tail.data() + keep, static_cast<std::streamsize>(tail.size() - keep));
+      fs::resize_file(path, from + keep, ec);
+      if (ec) return fail(Status::BadArgument, "journal " + path + ": cannot cut its torn last line: " + ec.message());
+      log::warn("journal", "{}: last line was torn ({} bytes without a line end, e.g. after kill -9 or power loss): "
+                "set apart in {}; every complete line kept", path, tail.size() - keep, tornPath);
+      tail.resize(keep);
+    }
+    lastCycleId_ = lastCycleIn(tail);
+  }
+  fd_ = ::open(path.c_str(), O_WRONLY | O_APPEND | O_CREAT | O_CLOEXEC, 0644);
+  if (fd_ < 0) return fail(Status::BadArgument, "journal " + path + ": " + std::strerror(errno));
   return {};
 }
 
@@ -54,10 +116,24 @@ std::string Journal::toJson(const CycleResult& r) {
 }
 
 void Journal::append(const CycleResult& r) {
-  if (!file_) return;
-  const std::string line = toJson(r);
-  std::fprintf(file_, "%s\n", line.c_str());
-  std::fflush(file_);
+  if (fd_ < 0) return;
+  const std::string line = toJson(r) + "\n";
+  const auto n = ::write(fd_, line.data(), line.size());
+  if (n == std::ssize(line)) {
+    lastCycleId_ = r.cycleId;
+    if (burst_ > 0) log::info("journal", "{}: writing again after {} records could not be written", path_, burst_);
+    burst_ = 0;
+    return;
+  }
+  const int err = n < 0 ? errno : ENOSPC;
+  if (n > 0) {  // a short write: end it so the next record starts on a line of its own
+    [[maybe_unused]] const auto ended = ::write(fd_, "\n", 1);
+  }
+  ++writeErrors_;
+  if (burst_++ == 0) {
+    log::error("journal", "{}: cannot write cycle {}: {}; further failures are counted (60 s summary) until a "
+               "write succeeds", path_, r.cycleId, std::strerror(err));
+  }
 }
 
 }  // namespace vgr::daemon

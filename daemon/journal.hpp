@@ -1,9 +1,22 @@
 // The append-only cycle journal: one JSON object per line, per cycle (fields in
 // docs/journal.md). Written from the cycle thread after the result was handed to the PLC
 // and robots, so a slow disk never delays a reply.
+//
+// Crash safety (docs/journal.md): open() finds a last line without its '\n' (kill -9 or
+// power loss mid-write), moves those bytes to <path>.torn-<unix seconds>, truncates the
+// journal after its last complete line and logs what it set apart; every complete line is
+// kept. Each record is one write() of the whole line to an O_APPEND descriptor (no fsync:
+// a power loss can cost the records the kernel had not yet written; the torn line it may
+// leave is repaired on the next start). A short write is ended with '\n' at once so the
+// next record starts on a line of its own.
+// Write errors (full disk, I/O error) are counted (writeErrors()) and logged once per
+// burst: the first failure after a success, and the recovery with the count.
+// Thread: open() before the cycle thread starts; append() from the cycle thread;
+// writeErrors() and lastCycleId() from any thread.
 #pragma once
 
-#include <cstdio>
+#include <atomic>
+#include <cstdint>
 #include <string>
 
 #include "core/cycle.hpp"
@@ -18,14 +31,25 @@ class Journal {
   Journal(const Journal&) = delete;
   Journal& operator=(const Journal&) = delete;
 
-  // Creates the parent folder if needed; error names the path.
+  // Creates the parent folder if needed, repairs a torn last line (see above); error
+  // names the path.
   Result<void> open(const std::string& path);
   void append(const CycleResult& r);
   // "trigger" is the cycle's TriggerSource ("modbus", "robot", "operator").
   static std::string toJson(const CycleResult& r);
 
+  // The `cycle` of the last complete line found by open() (0: none), then of the last
+  // record appended.
+  std::uint32_t lastCycleId() const { return lastCycleId_.load(); }
+  // Records that could not be written since open().
+  std::uint64_t writeErrors() const { return writeErrors_.load(); }
+
  private:
-  std::FILE* file_ = nullptr;
+  int fd_ = -1;
+  std::string path_;
+  std::atomic<std::uint32_t> lastCycleId_{0};
+  std::atomic<std::uint64_t> writeErrors_{0};
+  std::uint64_t burst_ = 0;  // failures since the last successful write (cycle thread)
 };
 
 }  // namespace vgr::daemon

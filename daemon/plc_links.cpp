@@ -22,6 +22,8 @@ std::vector<std::unique_ptr<protocol::PlcLink>> makePlcLinks(const config::CellC
     o.port = m.port;
     o.floatOrder = m.floatWordOrder;
     o.maxClients = m.maxClients;
+    o.idleTimeout = std::chrono::milliseconds(m.idleTimeoutMs);
+    o.allowedClients = m.allowedClients;
     o.requireTriggerEnable = m.requireTriggerEnable;
     o.resultDeadline = backstop;
     links.push_back(std::make_unique<protocol::ModbusServer>(o, onTrigger));

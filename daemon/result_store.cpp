@@ -4,7 +4,10 @@
 #include <chrono>
 
 #include <boost/asio/io_context.hpp>
+#include <boost/asio/post.hpp>
 #include <boost/asio/steady_timer.hpp>
+
+#include "core/log.hpp"
 
 namespace vgr::daemon {
 
@@ -76,24 +79,75 @@ std::vector<protocol::RobotReply> ResultStore::replies(const CycleResult& r, con
   return out;
 }
 
-void ResultStore::answer(Waiter& w, const protocol::RobotReply& reply) {
-  if (w.done) return;
+void ResultStore::answer(Waiter& w, const protocol::RobotReply& reply, protocol::WrittenFn written) {
+  if (w.done) {
+    if (written) written(false);
+    return;
+  }
   w.done = true;
   w.timer.cancel();
-  w.reply(reply);
+  w.reply(reply, std::move(written));
 }
 
-bool ResultStore::serveNext(const std::string& robot, int job, const protocol::ReplyFn& reply) {
+bool ResultStore::serveNext(const std::string& robot, int job, const Sender& send) {
   auto it = latest_.find(job);
   if (it == latest_.end()) return false;
   RobotState& s = state(robot);
   Progress& p = s.progress[job];
-  if (p.cycleId != it->second.cycleId) p = Progress{it->second.cycleId, 0, std::nullopt};
+  if (p.cycleId != it->second.cycleId) p = Progress{it->second.cycleId, 0, std::nullopt, {}};
   const std::vector<protocol::RobotReply> all = replies(it->second, s.policy);
-  if (p.next >= all.size()) return false;
-  p.last = all[p.next++];
-  reply(*p.last);
+  std::size_t index = 0;
+  if (!p.returned.empty()) {
+    index = *p.returned.begin();
+    p.returned.erase(p.returned.begin());
+  } else if (p.next < all.size()) {
+    index = p.next++;
+  } else {
+    return false;
+  }
+  p.last = all[index];
+  send(*p.last, onWritten(robot, job, p.cycleId, index));
   return true;
+}
+
+protocol::WrittenFn ResultStore::onWritten(const std::string& robot, int job, std::uint32_t cycleId, std::size_t index) {
+  // May run inside send() (a connection already closed answers at once): only the
+  // progress is touched here; waiting requests are served from a posted handler.
+  return [this, alive = std::weak_ptr<char>(alive_), robot, job, cycleId, index](bool written) {
+    if (written || alive.expired()) return;
+    auto it = robots_.find(robot);
+    if (it == robots_.end()) return;
+    Progress& p = it->second.progress[job];
+    if (p.cycleId != cycleId) return;  // a newer result of the job replaced it
+    p.returned.insert(index);
+    log::info("robot", "robot '{}': reply of cycle {} (part {}) did not reach the robot; it is served again", robot,
+              cycleId, index + 1);
+    boost::asio::post(io_, [this, alive, robot, job] {
+      if (!alive.expired()) serveWaiting(robot, job);
+    });
+  };
+}
+
+void ResultStore::serveWaiting(const std::string& robot, int job) {
+  for (auto it = waiters_.begin(); it != waiters_.end();) {
+    Waiter& w = *it->second;
+    if (w.done || w.robot != robot || w.job != job) {
+      ++it;
+      continue;
+    }
+    auto res = latest_.find(job);
+    if (res == latest_.end() || (w.cycle != 0 && w.cycle != res->second.cycleId)) {
+      ++it;
+      continue;
+    }
+    bool served = false;
+    serveNext(robot, job, [&](const protocol::RobotReply& reply, protocol::WrittenFn written) {
+      served = true;
+      answer(w, reply, std::move(written));
+    });
+    if (!served) return;
+    it = waiters_.erase(it);
+  }
 }
 
 void ResultStore::onCycleStarted(std::uint32_t cycleId, int /*jobId*/) { running_ = cycleId; }
@@ -112,9 +166,9 @@ void ResultStore::onResult(const CycleResult& r) {
       continue;
     }
     bool served = false;
-    serveNext(w.robot, w.job, [&](const protocol::RobotReply& reply) {
+    serveNext(w.robot, w.job, [&](const protocol::RobotReply& reply, protocol::WrittenFn written) {
       served = true;
-      answer(w, reply);
+      answer(w, reply, std::move(written));
     });
     if (!served) {
       const Progress& p = state(w.robot).progress[w.job];
@@ -165,14 +219,14 @@ void ResultStore::handle(const std::string& robot, const protocol::RobotRequest&
         reply(*p.last);
         return;
       }
-      if (serveNext(robot, job, reply)) return;
+      if (serveNext(robot, job, [&reply](const protocol::RobotReply& r, protocol::WrittenFn w) { reply(r, std::move(w)); })) return;
     } else if (!running_) {
       protocol::RobotReply r;
       r.status = Status::NoNewTrigger;
       reply(r);
       return;
     }
-  } else if (serveNext(robot, job, reply)) {
+  } else if (serveNext(robot, job, [&reply](const protocol::RobotReply& r, protocol::WrittenFn w) { reply(r, std::move(w)); })) {
     return;
   }
 

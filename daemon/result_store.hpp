@@ -2,7 +2,11 @@
 //  - GET,<job> (or GET = the robot's current job): the next part of the latest result of
 //    that job not yet delivered to this robot. Parts of one image are served one per
 //    request in the robot's PartOrder (paper 002's sorting strategies); each part goes to
-//    each robot once (per robot name, so a reconnect does not repeat it).
+//    each robot once (per robot name, so a reconnect does not repeat it). A part counts as
+//    delivered only once its reply reached the robot's connection (protocol::WrittenFn):
+//    one handed to a connection that closed, was replaced or reset before it got it goes
+//    back and is the first served on that robot's next GET (unless a newer result of the
+//    job arrived meanwhile: the robot then goes on with the newest).
 //  - When nothing undelivered exists the request waits for the next result of that job,
 //    up to the robot's reply deadline, then gets 2 RESULT_NOT_READY (a cycle is running) or
 //    3 NO_NEW_TRIGGER (nothing triggered). A result answers every request waiting for it:
@@ -81,7 +85,9 @@ class ResultStore {
     std::uint32_t cycleId = 0;  // the result the robot is being served from
     std::size_t next = 0;       // index of the next reply in replies(result, policy)
     std::optional<protocol::RobotReply> last;  // what the robot got last from it
+    std::set<std::size_t> returned;  // indices handed out but not delivered: served first
   };
+  using Sender = std::function<void(const protocol::RobotReply&, protocol::WrittenFn)>;
   struct RobotState {
     RobotPolicy policy;
     int currentJob = 0;
@@ -90,8 +96,12 @@ class ResultStore {
 
   RobotState& state(const std::string& robot);
   // Serves the next undelivered reply of `job` to `robot`; false when there is none.
-  bool serveNext(const std::string& robot, int job, const protocol::ReplyFn& reply);
-  void answer(Waiter& w, const protocol::RobotReply& reply);
+  bool serveNext(const std::string& robot, int job, const Sender& send);
+  void answer(Waiter& w, const protocol::RobotReply& reply, protocol::WrittenFn written = {});
+  // What a handed-out reply does once its fate is known: a reply that did not reach the
+  // robot goes back into its progress, and a waiting request of the robot is served.
+  protocol::WrittenFn onWritten(const std::string& robot, int job, std::uint32_t cycleId, std::size_t index);
+  void serveWaiting(const std::string& robot, int job);
 
   // Parks a request until a result of `job` (cycle 0: any; else that cycle) or the deadline.
   void wait(const std::string& robot, int job, std::uint32_t cycle, protocol::ReplyFn reply, int deadlineMs);
@@ -104,6 +114,7 @@ class ResultStore {
   std::optional<std::uint32_t> running_;  // cycle in progress
   std::map<std::uint64_t, std::shared_ptr<Waiter>> waiters_;  // by arrival order
   std::uint64_t nextWaiter_ = 1;
+  std::shared_ptr<char> alive_ = std::make_shared<char>();  // WrittenFns check it (they may outlive us)
 };
 
 }  // namespace vgr::daemon

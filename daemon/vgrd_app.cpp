@@ -112,9 +112,9 @@ struct VgrdApp::Impl {
     const auto c = camera->counters();
     log::info("main",
               "camera: {} frames, {} failed ({} timeouts, {} incomplete), {} re-triggers ({} recovered), {} reconnects, "
-              "{} abandoned; packets missing {}, resent {}; underruns {}; trigger overruns {}",
+              "{} abandoned; packets missing {}, resent {}; underruns {}; trigger overruns {}; journal write errors {}",
               c.completed, c.failed, c.timeouts, c.incomplete, c.retries, c.recovered, c.reconnects, c.abandoned,
-              c.missingPackets, c.resentPackets, c.underruns, cycles->overruns());
+              c.missingPackets, c.resentPackets, c.underruns, cycles->overruns(), journal.writeErrors());
     statsTimer.expires_after(std::chrono::seconds(60));
     statsTimer.async_wait([this](const boost::system::error_code& ec) {
       if (!ec) logStats();
@@ -149,6 +149,11 @@ Result<void> VgrdApp::start() {
   sinks.onStarted = [&s](std::uint32_t id, int job) { asio::post(s.io, [&s, id, job] { s.results->onCycleStarted(id, job); }); };
   sinks.onResult = [&s](const CycleResult& r) { s.publish(r); };
   s.cycles = std::make_unique<CycleRunner>(s.cfg, *s.camera, std::move(sinks));
+  // Cycle ids continue after the journal's last one (unique in the journal, no RESULT_ID
+  // repeated to the PLC after a restart).
+  s.cycles->setFirstCycleId(firstCycleIdAfter(s.journal.lastCycleId()));
+  log::info("main", "journal {}: last cycle {}; cycle ids continue at {}", s.cfg.journalPath, s.journal.lastCycleId(),
+            firstCycleIdAfter(s.journal.lastCycleId()));
   if (auto r = s.cycles->prepareJobs(); !r) return r;
 
   for (const auto& rc : s.cfg.robots) {
@@ -159,6 +164,7 @@ Result<void> VgrdApp::start() {
     ep.port = rc.port;
     ep.maxClients = static_cast<std::size_t>(rc.maxClients);
     ep.allowedClients = rc.allowedClients;
+    ep.idleTimeoutMs = rc.idleTimeoutMs;
     ep.strict.command = rc.strict.command;
     ep.strict.ready = rc.strict.ready;
     ep.strict.done = rc.strict.done;

@@ -1,7 +1,9 @@
-// One Modbus TCP request as ModbusServer handles it, socket given by the caller: libmodbus
-// framing and reply logic plus the checks the server adds (MBAP header, the PLC's writable
-// area) and the handshake of protocol/modbus_map.hpp. Split out of the server so the
-// fuzzer (tests/fuzz/fuzz_modbus_adu.cpp) drives exactly this code path.
+// One Modbus TCP request as ModbusServer handles it, socket given by the caller: framing
+// by the MBAP header (pure, scanAdu(): the server buffers each connection's bytes and
+// never waits inside a read), the checks the server adds (length per function code, the
+// supported function codes, the PLC's writable area), libmodbus' reply logic and the
+// handshake of protocol/modbus_map.hpp. Split out of the server so the fuzzer
+// (tests/fuzz/fuzz_modbus_adu.cpp) drives exactly this code path.
 //
 // Not thread-safe; one handler per server thread. handle() touches the map: the caller
 // serialises it with every other map access (ModbusServer holds its mutex).
@@ -22,11 +24,26 @@ namespace vgr::protocol {
 inline constexpr std::size_t kModbusTcpMaxAdu = 260;
 using ModbusFrame = std::array<std::uint8_t, kModbusTcpMaxAdu>;
 
-// What the server does with a frame libmodbus has read, from the frame alone (pure).
+// Where the next ADU in a connection's buffered bytes ends, from its MBAP header (pure).
+struct AduScan {
+  enum class Kind {
+    NeedMore,   // header or body incomplete: wait for more bytes
+    Complete,   // the first `length` bytes are one ADU
+    Malformed,  // protocol id != 0, or MBAP length outside [2, 254]: drop the connection
+  };
+  Kind kind = Kind::NeedMore;
+  std::size_t length = 0;
+};
+AduScan scanAdu(std::span<const std::uint8_t> buffered);
+
+// What the server does with one complete ADU, from the frame alone (pure).
 enum class FrameVerdict {
   Serve,           // a valid request: libmodbus answers it (exceptions included)
   RejectAddress,   // a write outside HR 0..15: exception 02, nothing written
-  Drop,            // protocol id != 0, MBAP length inconsistent, no function code
+  Unsupported,     // a function code outside FC01-06, 15, 16, 22, 23 (FC17 included):
+                   // exception 01 (illegal function), the connection is kept
+  Drop,            // protocol id != 0, MBAP length inconsistent with the frame or with
+                   // its function code's fields, no function code
 };
 struct FrameCheck {
   FrameVerdict verdict = FrameVerdict::Drop;
@@ -44,9 +61,10 @@ class ModbusRequestHandler {
 
   bool valid() const;  // false when libmodbus could not allocate its context
 
-  // Reads one request frame from `fd` (blocks up to the byte timeout between bytes).
-  // Returns its length (> 0), 0 for a frame libmodbus ignores, or -1 (connection closed,
-  // stalled or unparsable; the reason in lastError()).
+  // Reads one request frame from `fd`, framed by scanAdu() (blocks up to the byte timeout
+  // between bytes; ModbusServer does not use it, it buffers per connection without
+  // blocking). Returns its length (> 0), or -1 (connection closed, stalled or unparsable;
+  // the reason in lastError()).
   int receive(int fd, ModbusFrame& frame);
 
   struct Outcome {
@@ -55,9 +73,9 @@ class ModbusRequestHandler {
     FrameCheck check;
     HandshakeEvents events;  // when check.writes and the request was served
   };
-  // Answers the first `length` bytes of `frame` (as receive() filled it; libmodbus reads
-  // the whole buffer, never past it) on `fd` and runs the handshake after writes. The
-  // caller holds the map's lock.
+  // Answers the first `length` bytes of `frame` (one complete ADU; libmodbus reads the
+  // whole buffer, never past it) on `fd` and runs the handshake after writes. The caller
+  // holds the map's lock.
   Outcome handle(int fd, const ModbusFrame& frame, int length, ModbusMap& map, const ModbusMap::TriggerFn& onTrigger);
 
   const std::string& lastError() const { return lastError_; }
@@ -65,6 +83,7 @@ class ModbusRequestHandler {
  private:
   struct Ctx;
   std::unique_ptr<Ctx> ctx_;
+  std::chrono::microseconds byteTimeout_;
   std::string lastError_;
 };
 

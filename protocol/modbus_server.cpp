@@ -5,7 +5,6 @@
 #include <netinet/in.h>
 #include <netinet/tcp.h>
 #include <poll.h>
-#include <sys/select.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -31,7 +30,11 @@ namespace vgr::protocol {
 namespace {
 
 constexpr auto kHeartbeatPeriod = std::chrono::seconds(1);
-constexpr auto kByteTimeout = std::chrono::milliseconds(200);  // max gap inside one request frame
+constexpr auto kByteTimeout = std::chrono::milliseconds(200);  // ModbusRequestHandler::receive() only (unused here)
+// A request must be complete this long after its first byte arrived, else the client is
+// dropped (a peer dribbling bytes never holds the server: reads never block).
+constexpr auto kFrameTimeout = std::chrono::milliseconds(500);
+constexpr std::size_t kReadChunk = 4096;  // bytes read per readable client per poll round
 constexpr int kSendTimeoutMs = 200;                // a client that does not read is dropped
 
 std::string errnoText(int err) { return std::strerror(err); }
@@ -49,9 +52,13 @@ thread_local const void* tHandlerOwner = nullptr;
 }  // namespace
 
 struct ModbusServer::Impl {
+  using Clock = std::chrono::steady_clock;
   struct Client {
     int fd = -1;
     std::string peer;
+    std::vector<std::uint8_t> pending;  // bytes of the request(s) not yet complete
+    Clock::time_point frameStart{};     // when the first byte of `pending` arrived
+    Clock::time_point lastActivity{};   // when bytes last arrived (or it connected)
   };
 
   Impl(ModbusOptions o, TriggerHandler h) : options(std::move(o)), onTrigger(std::move(h)), map(options.floatOrder) {
@@ -71,6 +78,7 @@ struct ModbusServer::Impl {
   int listenFd = -1;
   std::array<int, 2> wakePipe{-1, -1};
   std::vector<Client> clients;
+  std::vector<in_addr> allowed;  // options.allowedClients, parsed
   std::uint16_t boundPort = 0;
   std::thread thread;
 
@@ -78,7 +86,9 @@ struct ModbusServer::Impl {
   void stop();
   void run();
   void acceptClient();
-  bool serveClient(Client& c);  // false: drop the client
+  bool serveClient(Client& c);  // false: the client was dropped
+  bool answer(Client& c, const ModbusFrame& req, int length);  // false: the client was dropped
+  void dropStalled(Clock::time_point now);
   void closeClient(Client& c, std::string_view why);
   std::uint32_t callHandler(int jobId);
   void releaseResources();
@@ -89,6 +99,14 @@ Result<void> ModbusServer::Impl::start() {
   const std::string where = options.bind + ":" + std::to_string(options.port);
   if (options.maxClients < 1 || options.maxClients > 64) {
     return fail(Status::BadArgument, "modbus: maxClients " + std::to_string(options.maxClients) + " outside [1, 64]");
+  }
+  allowed.clear();
+  for (const auto& a : options.allowedClients) {
+    in_addr ip{};
+    if (inet_pton(AF_INET, a.c_str(), &ip) != 1) {
+      return fail(Status::BadArgument, "modbus: allowed client '" + a + "' is not a numeric IPv4 address");
+    }
+    allowed.push_back(ip);
   }
   sockaddr_in addr{};
   addr.sin_family = AF_INET;
@@ -119,7 +137,9 @@ Result<void> ModbusServer::Impl::start() {
   }
 
   thread = std::thread([this] { run(); });
-  log::info("modbus", "listening on {}:{} (max {} clients, floats {})", options.bind, boundPort, options.maxClients,
+  log::info("modbus", "listening on {}:{} (max {} clients, idle timeout {} ms, {} allowed, floats {})", options.bind,
+            boundPort, options.maxClients, options.idleTimeout.count(),
+            allowed.empty() ? std::string("any client") : std::to_string(allowed.size()) + " addresses",
             options.floatOrder == WordOrder::HighWordFirst ? "high word first" : "low word first");
   return {};
 }
@@ -163,21 +183,22 @@ void ModbusServer::Impl::acceptClient() {
     return;
   }
   const std::string peer = peerName(addr);
+  if (!allowed.empty() && std::none_of(allowed.begin(), allowed.end(),
+                                       [&](const in_addr& a) { return a.s_addr == addr.sin_addr.s_addr; })) {
+    ::close(fd);
+    log::warn("modbus", "client {} refused: not in allowed_clients", peer);
+    return;
+  }
   if (std::ssize(clients) >= options.maxClients) {
     ::close(fd);
     log::warn("modbus", "client {} refused: already {} clients", peer, clients.size());
-    return;
-  }
-  if (fd >= FD_SETSIZE) {  // libmodbus waits with select() inside modbus_receive()
-    ::close(fd);
-    log::warn("modbus", "client {} refused: descriptor {} above FD_SETSIZE", peer, fd);
     return;
   }
   const int one = 1;
   setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
   timeval sendTimeout{0, kSendTimeoutMs * 1000};
   setsockopt(fd, SOL_SOCKET, SO_SNDTIMEO, &sendTimeout, sizeof sendTimeout);
-  clients.push_back(Client{fd, peer});
+  clients.push_back(Client{fd, peer, {}, {}, Clock::now()});
   log::info("modbus", "client {} connected ({} connected)", peer, clients.size());
 }
 
@@ -197,16 +218,46 @@ std::uint32_t ModbusServer::Impl::callHandler(int jobId) {
 }
 
 bool ModbusServer::Impl::serveClient(Client& c) {
-  ModbusFrame req{};
-  const int rc = handler_->receive(c.fd, req);
-  if (rc < 0) {
-    closeClient(c, handler_->lastError());
+  // Non-blocking: take what the socket holds now, answer every complete ADU in it, keep
+  // the rest for the next round. No read ever waits for a client.
+  std::array<std::uint8_t, kReadChunk> buf{};
+  const auto n = ::recv(c.fd, buf.data(), buf.size(), MSG_DONTWAIT);
+  if (n == 0) {
+    closeClient(c, "closed by peer");
     return false;
   }
-  if (rc == 0) return true;  // request for another unit, ignored by libmodbus
+  if (n < 0) {
+    if (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR) return true;
+    closeClient(c, errno == ECONNRESET ? std::string("closed by peer") : "receive failed: " + errnoText(errno));
+    return false;
+  }
+  c.lastActivity = Clock::now();
+  if (c.pending.empty()) c.frameStart = c.lastActivity;
+  c.pending.insert(c.pending.end(), buf.begin(), buf.begin() + n);
 
+  std::size_t used = 0;
+  for (;;) {
+    const AduScan scan = scanAdu(std::span<const std::uint8_t>(c.pending).subspan(used));
+    if (scan.kind == AduScan::Kind::Malformed) {
+      closeClient(c, "malformed frame");
+      return false;
+    }
+    if (scan.kind == AduScan::Kind::NeedMore) break;
+    ModbusFrame req{};
+    std::copy_n(c.pending.begin() + static_cast<std::ptrdiff_t>(used), scan.length, req.begin());
+    used += scan.length;
+    if (!answer(c, req, static_cast<int>(scan.length))) return false;
+  }
+  if (used > 0) {
+    c.pending.erase(c.pending.begin(), c.pending.begin() + static_cast<std::ptrdiff_t>(used));
+    c.frameStart = Clock::now();  // the remainder, if any, starts the next request now
+  }
+  return true;
+}
+
+bool ModbusServer::Impl::answer(Client& c, const ModbusFrame& req, int length) {
   std::lock_guard lock(mutex);
-  const auto out = handler_->handle(c.fd, req, rc, map, [this](int jobId) { return callHandler(jobId); });
+  const auto out = handler_->handle(c.fd, req, length, map, [this](int jobId) { return callHandler(jobId); });
   for (const auto& r : deferred) map.publishResult(r);
   deferred.clear();
   const HandshakeEvents& ev = out.events;
@@ -215,6 +266,9 @@ bool ModbusServer::Impl::serveClient(Client& c) {
   if (ev.overrun) log::debug("modbus", "trigger while busy from {}: OVERRUN", c.peer);
   if (ev.ignoredNotReady) log::debug("modbus", "trigger while not ready from {} ignored", c.peer);
   if (ev.ignoredNotEnabled) log::debug("modbus", "trigger without TRIGGER_ENABLE from {} ignored", c.peer);
+  if (out.check.verdict == FrameVerdict::Unsupported) {
+    log::debug("modbus", "function code {} from {}: exception 01 (illegal function)", static_cast<int>(req[7]), c.peer);
+  }
   if (!out.keep) {
     closeClient(c, out.dropReason);
     return false;
@@ -222,8 +276,17 @@ bool ModbusServer::Impl::serveClient(Client& c) {
   return true;
 }
 
+void ModbusServer::Impl::dropStalled(Clock::time_point now) {
+  for (auto& c : clients) {
+    if (c.fd >= 0 && !c.pending.empty() && now - c.frameStart >= kFrameTimeout) {
+      closeClient(c, "stalled mid-frame (request incomplete after " + std::to_string(kFrameTimeout.count()) + " ms)");
+    } else if (c.fd >= 0 && options.idleTimeout.count() > 0 && now - c.lastActivity >= options.idleTimeout) {
+      closeClient(c, "idle for " + std::to_string(options.idleTimeout.count()) + " ms");
+    }
+  }
+}
+
 void ModbusServer::Impl::run() {
-  using Clock = std::chrono::steady_clock;
   auto nextBeat = Clock::now() + kHeartbeatPeriod;
   std::vector<pollfd> fds;
   for (;;) {
@@ -232,6 +295,10 @@ void ModbusServer::Impl::run() {
     fds.push_back({listenFd, POLLIN, 0});
     for (const auto& c : clients) fds.push_back({c.fd, POLLIN, 0});
     auto wakeAt = nextBeat;
+    for (const auto& c : clients) {
+      if (!c.pending.empty()) wakeAt = std::min(wakeAt, c.frameStart + kFrameTimeout);
+      if (options.idleTimeout.count() > 0) wakeAt = std::min(wakeAt, c.lastActivity + options.idleTimeout);
+    }
     {
       std::lock_guard lock(mutex);
       if (const auto due = map.busyDeadline(); due && *due < wakeAt) wakeAt = *due;
@@ -256,12 +323,17 @@ void ModbusServer::Impl::run() {
                   options.resultDeadline.count());
       }
     }
-    if (rc <= 0) continue;
-    if ((fds[0].revents & POLLIN) != 0) return;  // stop()
+    if (rc > 0 && (fds[0].revents & POLLIN) != 0) return;  // stop()
+    if (rc <= 0) {
+      dropStalled(now);
+      std::erase_if(clients, [](const Client& c) { return c.fd < 0; });
+      continue;
+    }
     // Serve the clients polled in this round (fds[2 + i] belongs to clients[i]).
     for (std::size_t i = 0; i + 2 < fds.size(); ++i) {
       if ((fds[i + 2].revents & (POLLIN | POLLHUP | POLLERR)) != 0) serveClient(clients[i]);
     }
+    dropStalled(Clock::now());
     std::erase_if(clients, [](const Client& c) { return c.fd < 0; });
     if ((fds[1].revents & POLLIN) != 0) acceptClient();
   }

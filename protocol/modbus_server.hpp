@@ -5,10 +5,16 @@
 // from any thread; the TriggerHandler runs on the Modbus thread. One mutex guards the map:
 // every client request is answered and its handshake logic run under it, so a reader never
 // sees half a result.
-// Clients: up to maxClients at once (more are accepted and closed at once). A client that
-// disconnects, sends a malformed frame (protocol id != 0, inconsistent length, unparsable)
-// or stalls mid-frame (> 200 ms between bytes) is dropped; the others are not disturbed.
-// Writes outside HR 0..15 get exception 02 (illegal data address); any unit id is served.
+// Clients: up to maxClients at once (more are accepted and closed at once), only from
+// allowedClients when that is set; one silent for idleTimeout is closed. Reads never
+// block: each connection's bytes are buffered and every complete request in them answered
+// (framed by the MBAP header), so a client that dribbles bytes holds only itself. A client
+// that disconnects, sends a malformed frame (protocol id != 0, MBAP length outside
+// [2, 254] or inconsistent with its function code) or does not complete a request within
+// 500 ms of its first byte is dropped; the others are not disturbed.
+// Writes outside HR 0..15 get exception 02 (illegal data address); function codes other
+// than FC01-06, 15, 16, 22, 23 (FC17 included) get exception 01 (illegal function) and the
+// connection stays; any unit id is served.
 #pragma once
 
 #include <chrono>
@@ -16,6 +22,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "core/result.hpp"
 #include "core/status.hpp"
@@ -29,6 +36,11 @@ struct ModbusOptions {
   std::uint16_t port = 1502;       // 0 = pick a free port (read it back with port())
   WordOrder floatOrder = WordOrder::HighWordFirst;
   int maxClients = 8;  // simultaneous PLC connections, [1, 64]
+  // A connection that sends nothing for this long is closed (its slot freed); zero = off.
+  std::chrono::milliseconds idleTimeout{60000};
+  // Peer IPv4 addresses (numeric) allowed to connect; empty = anyone. Others are closed at
+  // once. start() fails on an entry that is not an IPv4 address.
+  std::vector<std::string> allowedClients;
   bool requireTriggerEnable = false;  // triggers need CONTROL b3 (ModbusMap::setRequireTriggerEnable)
   // Backstop: BUSY longer than this ends the cycle with -5 PROCESSING_TIMEOUT at the PLC
   // (ModbusMap::setResultDeadline); zero = off. vgrd: cell.cycle_deadline_ms + 100 ms.

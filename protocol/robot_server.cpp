@@ -2,6 +2,7 @@
 
 #include <netinet/in.h>
 #include <netinet/tcp.h>
+#include <sys/socket.h>
 
 #include <array>
 #include <atomic>
@@ -35,6 +36,10 @@ constexpr std::size_t kReadChunkBytes = 512;   // one async_read_some
 constexpr std::size_t kMaxQueuedRequests = 8;  // per connection; beyond it we stop reading
 constexpr auto kWriteTimeout = std::chrono::seconds(5);
 constexpr auto kAcceptRetryDelay = std::chrono::milliseconds(200);
+// A reply written after the robot closed its sending side counts as delivered only if the
+// robot has not reset the connection on it this long after: a robot that closed its
+// socket answers our data with RST within one round trip; a half-closed one still reads.
+constexpr auto kEofProbeDelay = std::chrono::milliseconds(50);
 // Strict dialect: pause before asking again after a reply that came at once and had
 // nothing to push (e.g. NO_PART_FOUND), so a misconfigured job never spins.
 constexpr auto kStrictRetryDelay = std::chrono::milliseconds(100);
@@ -105,8 +110,16 @@ class Session : public std::enable_shared_from_this<Session> {
   Session& operator=(const Session&) = delete;
 
   virtual void start() = 0;
-  // Reply for request number `seq` from the handler; ignored unless it is still awaited.
-  virtual void deliver(std::uint64_t seq, const RobotReply& reply) = 0;
+  // Reply for request number `seq` from the handler; ignored unless it is still awaited
+  // (then `written` gets false at once).
+  void deliver(std::uint64_t seq, const RobotReply& reply, WrittenFn written) {
+    if (closed_ || !awaitingReply_ || seq != seq_) {
+      if (written) written(false);
+      return;
+    }
+    written_ = std::move(written);
+    deliverAwaited(reply);
+  }
 
   // The handler dropped every copy of the ReplyFn for `seq` without calling it.
   void replyDropped(std::uint64_t seq, int job) {
@@ -115,11 +128,13 @@ class Session : public std::enable_shared_from_this<Session> {
                server_->endpoint.name, job, peer_);
     RobotReply r;
     r.status = Status::Internal;
-    deliver(seq, r);
+    deliver(seq, r, {});
   }
 
   void close(std::string_view reason);
   bool closed() const { return closed_; }
+  // When the robot last sent a byte (or the connection opened, or a reply was written).
+  std::chrono::steady_clock::time_point lastActivity() const { return lastActivity_; }
   const asio::ip::address& address() const { return address_; }
   asio::io_context::executor_type executor() { return server_->io.get_executor(); }
 
@@ -141,6 +156,15 @@ class Session : public std::enable_shared_from_this<Session> {
   }
   virtual void onWritten() = 0;
   virtual void onClosing() {}
+  // The awaited reply, accepted: send it (written_ holds its WrittenFn).
+  virtual void deliverAwaited(const RobotReply& reply) = 0;
+  // Tells the handler whether the reply in flight reached the robot (once).
+  void settleWritten(bool written) {
+    if (!written_) return;
+    WrittenFn fn = std::move(written_);
+    written_ = nullptr;
+    fn(written);
+  }
 
   void onWrite(const error_code& ec) {
     writing_ = false;
@@ -162,6 +186,8 @@ class Session : public std::enable_shared_from_this<Session> {
   const asio::ip::address address_;
   std::array<char, kReadChunkBytes> readBuf_{};
   std::string outgoing_;  // the bytes being written
+  WrittenFn written_;     // of the handler's reply being written, if it asked
+  std::chrono::steady_clock::time_point lastActivity_ = std::chrono::steady_clock::now();
   std::uint64_t seq_ = 0;  // number of the request handed to the handler
   std::uint64_t writeGen_ = 0;
   std::uint64_t replies_ = 0;
@@ -182,10 +208,12 @@ class RequestSession final : public Session {
                  asio::ip::address address)
       : Session(std::move(socket), server, id, std::move(peer), std::move(address)), decoder_(server->endpoint.dialect) {}
 
-  void start() override { advance(); }
+  void start() override {
+    armIdleTimer();
+    advance();
+  }
 
-  void deliver(std::uint64_t seq, const RobotReply& reply) override {
-    if (closed_ || !awaitingReply_ || seq != seq_) return;
+  void deliverAwaited(const RobotReply& reply) override {
     awaitingReply_ = false;
     writeBytes(formatReply(server_->endpoint.dialect, reply));
     advance();
@@ -247,13 +275,66 @@ class RequestSession final : public Session {
       close(ec.message());
       return;
     }
+    lastActivity_ = std::chrono::steady_clock::now();
     decoder_.append(std::string_view(readBuf_.data(), n));
     advance();
   }
 
-  void onWritten() override { advance(); }
+  // endpoint.idleTimeoutMs: close a connection silent that long with nothing in progress.
+  void armIdleTimer() {
+    const int ms = server_->endpoint.idleTimeoutMs;
+    if (ms <= 0) return;
+    const auto now = std::chrono::steady_clock::now();
+    const bool busy = awaitingReply_ || writing_ || !inbox_.empty();
+    const auto due = lastActivity_ + std::chrono::milliseconds(ms);
+    idleTimer_.expires_at(busy || due <= now ? now + std::chrono::milliseconds(ms) : due);
+    idleTimer_.async_wait([self = shared_from_this(), this, ms](const error_code& ec) {
+      if (ec || closed_) return;
+      const bool idle = !awaitingReply_ && !writing_ && inbox_.empty() &&
+                        std::chrono::steady_clock::now() - lastActivity_ >= std::chrono::milliseconds(ms);
+      if (idle) {
+        close("idle for " + std::to_string(ms) + " ms (idle_timeout_ms)");
+        return;
+      }
+      armIdleTimer();
+    });
+  }
+
+  void onWritten() override {
+    lastActivity_ = std::chrono::steady_clock::now();
+    if (!peerEof_ || !written_) {
+      settleWritten(true);
+      advance();
+      return;
+    }
+    // The robot closed its side before this reply: did it close its socket (it resets on
+    // our data) or only shut down sending (it still reads)? Ask again after a round trip.
+    probeTimer_.expires_after(kEofProbeDelay);
+    probeTimer_.async_wait([self = shared_from_this(), this](const error_code& ec) {
+      if (ec || closed_) return;  // close() settled it
+      settleWritten(!peerReset());
+      advance();
+    });
+  }
+
+  bool peerReset() {
+    tcp_info info{};
+    socklen_t len = sizeof info;
+    if (::getsockopt(socket_.native_handle(), IPPROTO_TCP, TCP_INFO, &info, &len) != 0) return true;
+    int err = 0;
+    len = sizeof err;
+    ::getsockopt(socket_.native_handle(), SOL_SOCKET, SO_ERROR, &err, &len);
+    return info.tcpi_state == TCP_CLOSE || err != 0;
+  }
+
+  void onClosing() override {
+    probeTimer_.cancel();
+    idleTimer_.cancel();
+  }
 
   RequestDecoder decoder_;
+  asio::steady_timer probeTimer_{server_->io};
+  asio::steady_timer idleTimer_{server_->io};
   std::deque<Result<RobotRequest>> inbox_;  // parsed requests and error replies, in order
   bool peerEof_ = false;
 };
@@ -277,8 +358,7 @@ class StrictSession final : public Session {
     ask();
   }
 
-  void deliver(std::uint64_t seq, const RobotReply& reply) override {
-    if (closed_ || !awaitingReply_ || seq != seq_) return;
+  void deliverAwaited(const RobotReply& reply) override {
     awaitingReply_ = false;
     if (reply.status == Status::Ok) {
       Result<std::string> frame = formatStrictPoseFrame(reply.pose);
@@ -291,6 +371,8 @@ class StrictSession final : public Session {
       log::error("robot", "robot '{}': cycle {}: {}; not sent", server_->endpoint.name, reply.cycleId,
                  frame.error().message);
     }
+    // Statuses are not pushed in this dialect: consumed as they are.
+    settleWritten(true);
     // Nothing to move. Statuses 2 and 3 came after the reply deadline: ask again at once;
     // anything else may have come at once: pause so a misconfiguration cannot spin.
     const bool waited = reply.status == Status::ResultNotReady || reply.status == Status::NoNewTrigger;
@@ -340,6 +422,7 @@ class StrictSession final : public Session {
       close(ec == asio::error::eof ? std::string("peer closed the connection") : ec.message());
       return;
     }
+    lastActivity_ = std::chrono::steady_clock::now();
     exchange_.feed(std::string_view(readBuf_.data(), n));
     for (;;) {
       StrictExchange::Event e = exchange_.poll();
@@ -386,7 +469,8 @@ class StrictSession final : public Session {
     if (server_->strictOutcome) server_->strictOutcome(server_->endpoint.name, outcome);
   }
 
-  void onWritten() override {}
+  // The pose frame (or a later step) reached the robot: the part counts as delivered.
+  void onWritten() override { settleWritten(true); }
 
   void onClosing() override {
     ++stepGen_;
@@ -423,9 +507,13 @@ class PendingReply {
     if (!done_.load()) session_->replyDropped(seq_, job_);
   }
 
-  void complete(const RobotReply& reply) {
-    if (done_.exchange(true)) return;  // exactly once
-    asio::dispatch(session_->executor(), [s = session_, seq = seq_, reply] { s->deliver(seq, reply); });
+  void complete(const RobotReply& reply, WrittenFn written) {
+    if (done_.exchange(true)) {  // exactly once
+      if (written) written(false);
+      return;
+    }
+    asio::dispatch(session_->executor(),
+                   [s = session_, seq = seq_, reply, w = std::move(written)]() mutable { s->deliver(seq, reply, std::move(w)); });
   }
 
  private:
@@ -439,7 +527,7 @@ void Session::callHandler(const RobotRequest& req) {
   awaitingReply_ = true;
   const std::uint64_t seq = ++seq_;
   auto pending = std::make_shared<PendingReply>(shared_from_this(), seq, req.job);
-  ReplyFn reply = [pending](const RobotReply& r) { pending->complete(r); };
+  ReplyFn reply = ReplyFn::withCompletion([pending](const RobotReply& r, WrittenFn w) { pending->complete(r, std::move(w)); });
   try {
     server_->handler(server_->endpoint.name, req, std::move(reply));
   } catch (const std::exception& e) {
@@ -447,7 +535,7 @@ void Session::callHandler(const RobotRequest& req) {
                req.job, e.what());
     RobotReply r;
     r.status = Status::Internal;
-    pending->complete(r);
+    pending->complete(r, {});
   }
 }
 
@@ -456,6 +544,7 @@ void Session::close(std::string_view reason) {
   closed_ = true;
   awaitingReply_ = false;
   onClosing();
+  settleWritten(false);
   error_code ignored;
   socket_.shutdown(tcp::socket::shutdown_both, ignored);  // ENOTCONN after a reset is expected
   socket_.close(ignored);
@@ -506,14 +595,12 @@ void ServerCore::onAccept(const error_code& ec, tcp::socket socket) {
     return;
   }
   if (sessions.size() >= endpoint.maxClients) {
-    // Full: a reconnecting robot replaces its own oldest (stale) connection.
+    // Full: a reconnecting robot replaces its own stalest connection (silent the longest;
+    // a rebooted controller's old socket is older than any live one's last request).
     std::shared_ptr<Session> stale;
     for (auto& [sid, weak] : sessions) {
       auto s = weak.lock();
-      if (s && s->address() == address) {
-        stale = std::move(s);
-        break;  // the map is ordered by id: this is the oldest
-      }
+      if (s && s->address() == address && (!stale || s->lastActivity() < stale->lastActivity())) stale = std::move(s);
     }
     if (stale) {
       stale->close("replaced by a new connection from the same address");

@@ -11,7 +11,7 @@
 #include <functional>
 #include <memory>
 #include <string>
-
+#include <type_traits>
 #include <vector>
 
 #include "core/result.hpp"
@@ -30,12 +30,16 @@ struct RobotEndpoint {
   std::string bind = "127.0.0.1";  // IP address ("0.0.0.0" / "::" for all) or host name
   std::uint16_t port = 0;          // 0 = ephemeral (tests); see RobotServer::port()
   // Open connections at most. When full, a new connection from an address that already
-  // has one replaces the oldest such connection (a robot that rebooted or re-ran its
-  // program leaves a stale socket behind); from any other address it is closed at once.
+  // has one replaces the one of them silent the longest (a robot that rebooted or re-ran
+  // its program leaves a stale socket behind); from any other address it is closed at once.
   std::size_t maxClients = 8;
   // Peer IP addresses allowed to connect (numeric, v4 or v6); empty = anyone. Others are
   // closed at once with a warning.
   std::vector<std::string> allowedClients;
+  // Request dialects: a connection with no byte from the robot for this long, and no
+  // request in progress, is closed (ms; 0 = never). Not applied to the strict dialect
+  // (vgrd speaks first there; its step timeout covers a silent robot).
+  int idleTimeoutMs = 0;
   // Strict dialect only: the tokens and the time each step may take (ms, > 0).
   StrictTokens strict;
   int stepTimeoutMs = 10000;
@@ -51,12 +55,44 @@ struct StrictOutcome {
 // Called on the I/O thread after every strict exchange (after the log line).
 using StrictOutcomeFn = std::function<void(const std::string& robotName, const StrictOutcome& outcome)>;
 
+// Told, on the I/O thread, whether a reply reached the robot: true once it was written to
+// the connection (for a robot that had closed its sending side: and the robot did not
+// reset the connection on it within 50 ms, i.e. it still reads); false when it was not
+// (the connection closed or was replaced before, the write failed or timed out, the robot
+// reset on it, the server stopped). Called exactly once per reply that has one.
+using WrittenFn = std::function<void(bool written)>;
+
 // Sends the reply to the request it was handed for. Call exactly once, on the I/O thread
 // (a call from another thread is marshalled to the I/O thread, but do not rely on it).
-// Later calls, and calls after the connection closed or the server stopped, are ignored.
-// If every copy is destroyed without a call, the robot gets status INTERNAL (-8), so a
-// handler bug never leaves a robot waiting.
-using ReplyFn = std::function<void(const RobotReply&)>;
+// Later calls, and calls after the connection closed or the server stopped, are ignored
+// (their WrittenFn gets false). If every copy is destroyed without a call, the robot gets
+// status INTERNAL (-8), so a handler bug never leaves a robot waiting. A caller that must
+// know whether the robot got the reply (ResultStore: a part counts as delivered only then)
+// passes a WrittenFn; any callable taking (const RobotReply&) converts to a ReplyFn.
+class ReplyFn {
+ public:
+  using Fn = std::function<void(const RobotReply&, WrittenFn)>;
+  ReplyFn() = default;
+  template <class F>
+    requires(std::is_invocable_v<F&, const RobotReply&> && !std::is_same_v<std::decay_t<F>, ReplyFn>)
+  ReplyFn(F f)  // NOLINT(google-explicit-constructor): handlers pass lambdas
+      : fn_([f = std::move(f)](const RobotReply& r, const WrittenFn& written) mutable {
+          f(r);
+          if (written) written(true);
+        }) {}
+  static ReplyFn withCompletion(Fn fn) {
+    ReplyFn r;
+    r.fn_ = std::move(fn);
+    return r;
+  }
+  void operator()(const RobotReply& reply, WrittenFn written = {}) const {
+    if (fn_) fn_(reply, std::move(written));
+  }
+  explicit operator bool() const { return static_cast<bool>(fn_); }
+
+ private:
+  Fn fn_;
+};
 
 // Called on the I/O thread for each well-formed request, one at a time per connection
 // (the next request of the same connection waits for this one's reply). Must not block:

@@ -1,5 +1,5 @@
 // libFuzzer target: raw Modbus TCP bytes from a PLC connection through exactly the code
-// path ModbusServer uses (protocol/modbus_request.hpp): libmodbus framing (modbus_receive),
+// path ModbusServer uses (protocol/modbus_request.hpp): MBAP framing (scanAdu),
 // our frame checks, libmodbus' reply on the map's register tables, and the handshake of
 // protocol/modbus_map.hpp — with a fake daemon that accepts triggers and publishes results.
 // The input is written to one end of a socketpair, which is then shut down, and the server

@@ -1,0 +1,224 @@
+// A part counts as delivered only once its reply reached the robot's connection: the
+// daemon's ResultStore behind a real RobotServer, raw TCP robots on loopback. A robot whose
+// waiting connection closes (FIN or RST) or is replaced before the result arrives gets that
+// part on its next GET after reconnecting, and a part that was delivered is not repeated.
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <chrono>
+#include <functional>
+#include <future>
+#include <memory>
+#include <string>
+#include <thread>
+
+#include <boost/asio/executor_work_guard.hpp>
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/post.hpp>
+
+#include "daemon/result_store.hpp"
+#include "protocol/robot_server.hpp"
+
+namespace vgr::daemon {
+namespace {
+
+using namespace std::chrono_literals;
+namespace asio = boost::asio;
+using Clock = std::chrono::steady_clock;
+
+struct RawClient {
+  explicit RawClient(std::uint16_t port) : fd(::socket(AF_INET, SOCK_STREAM, 0)) {
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_port = htons(port);
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    connected = fd >= 0 && ::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0;
+  }
+  ~RawClient() { close(); }
+  RawClient(const RawClient&) = delete;
+  RawClient& operator=(const RawClient&) = delete;
+  bool send(std::string_view s) const { return ::send(fd, s.data(), s.size(), MSG_NOSIGNAL) == std::ssize(s); }
+  void close() {
+    if (fd >= 0) ::close(fd);
+    fd = -1;
+  }
+  void reset() {  // close with RST
+    linger l{1, 0};
+    ::setsockopt(fd, SOL_SOCKET, SO_LINGER, &l, sizeof l);
+    close();
+  }
+  // Reads up to and including `end`, or "" after `timeout`.
+  std::string readUntil(char end, std::chrono::milliseconds timeout = 3000ms) const {
+    std::string out;
+    const auto until = Clock::now() + timeout;
+    while (Clock::now() < until) {
+      pollfd p{fd, POLLIN, 0};
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(until - Clock::now()).count();
+      if (::poll(&p, 1, static_cast<int>(left)) <= 0) break;
+      char c = 0;
+      if (::recv(fd, &c, 1, 0) != 1) break;
+      out.push_back(c);
+      if (c == end) return out;
+    }
+    return out;
+  }
+  int fd;
+  bool connected = false;
+};
+
+PartResult part(double x) {
+  PartResult p;
+  p.pose = poseFromXyzRz(x, 0, 0, 0);
+  p.score = 0.9;
+  return p;
+}
+
+class robot_delivery : public ::testing::Test {
+ protected:
+  void start(std::size_t maxClients = 8) {
+    store_ = std::make_unique<ResultStore>(io_, std::set<int>{1});
+    store_->addRobot("ur", RobotPolicy{1, 800, PartOrder::BestScore, 0});
+    protocol::RobotEndpoint ep;
+    ep.name = "ur";
+    ep.dialect = protocol::Dialect::Ur;
+    ep.bind = "127.0.0.1";
+    ep.port = 0;
+    ep.maxClients = maxClients;
+    server_ = std::make_unique<protocol::RobotServer>(
+        io_, ep, [this](const std::string& robot, const protocol::RobotRequest& req, protocol::ReplyFn reply) {
+          store_->handle(robot, req, std::move(reply));
+        });
+    ASSERT_TRUE(server_->start());
+    port_ = server_->port();
+    thread_ = std::thread([this] { io_.run(); });
+  }
+  void TearDown() override {
+    if (thread_.joinable()) {
+      onIo([this] { server_->stop(); });
+      work_.reset();
+      io_.stop();
+      thread_.join();
+    }
+    server_.reset();
+    store_.reset();
+  }
+  void onIo(const std::function<void()>& f) {
+    std::promise<void> done;
+    asio::post(io_, [&] {
+      f();
+      done.set_value();
+    });
+    done.get_future().wait();
+  }
+  void publish(std::uint32_t cycle, std::vector<PartResult> parts) {
+    CycleResult r;
+    r.cycleId = cycle;
+    r.jobId = 1;
+    r.status = Status::Ok;
+    r.parts = std::move(parts);
+    onIo([&] {
+      store_->onCycleStarted(cycle, 1);
+      store_->onResult(r);
+    });
+  }
+  std::size_t clients() {
+    std::size_t n = 0;
+    onIo([&] { n = server_->clientCount(); });
+    return n;
+  }
+
+  asio::io_context io_;
+  asio::executor_work_guard<asio::io_context::executor_type> work_ = asio::make_work_guard(io_);
+  std::unique_ptr<ResultStore> store_;
+  std::unique_ptr<protocol::RobotServer> server_;
+  std::uint16_t port_ = 0;
+  std::thread thread_;
+};
+
+// UR reply: (status,cycle,x,y,z,rx,ry,rz); x in metres with 6 decimals (part() takes mm).
+std::string urPart(std::uint32_t cycle, double x) {
+  return "(0," + std::to_string(cycle) + "," + std::to_string(x / 1000.0) + ",";
+}
+
+TEST_F(robot_delivery, WaitingConnectionClosedBeforeTheResultDoesNotLoseThePart) {
+  start();
+  {
+    RawClient a(port_);
+    ASSERT_TRUE(a.connected);
+    ASSERT_TRUE(a.send("GET,1\n"));  // waits: no result yet
+    std::this_thread::sleep_for(100ms);
+  }  // the robot program is aborted: FIN
+  std::this_thread::sleep_for(100ms);
+  publish(7, {part(100)});
+  std::this_thread::sleep_for(300ms);
+  RawClient b(port_);
+  ASSERT_TRUE(b.connected);
+  ASSERT_TRUE(b.send("GET,1\n"));
+  const std::string got = b.readUntil(')');
+  EXPECT_EQ(got.rfind(urPart(7, 100), 0), 0u) << "the part went to the closed connection: " << got;
+  ASSERT_TRUE(b.send("GET,1\n"));
+  EXPECT_EQ(b.readUntil(')').substr(0, 3), "(3,") << "a delivered part is not repeated";
+}
+
+TEST_F(robot_delivery, WaitingConnectionResetBeforeTheResultDoesNotLoseThePart) {
+  start();
+  {
+    RawClient a(port_);
+    ASSERT_TRUE(a.connected);
+    ASSERT_TRUE(a.send("GET,1\n"));
+    std::this_thread::sleep_for(100ms);
+    a.reset();
+  }
+  std::this_thread::sleep_for(100ms);
+  publish(8, {part(200), part(201)});
+  RawClient b(port_);
+  ASSERT_TRUE(b.connected);
+  ASSERT_TRUE(b.send("GET,1\n"));
+  EXPECT_EQ(b.readUntil(')').rfind(urPart(8, 200), 0), 0u);
+  ASSERT_TRUE(b.send("GET,1\n"));
+  EXPECT_EQ(b.readUntil(')').rfind(urPart(8, 201), 0), 0u);
+}
+
+// The robot reconnects while its old connection still waits: the new connection replaces
+// the old one (maxClients 1); the result arrives after that and must not be counted for
+// the replaced connection.
+TEST_F(robot_delivery, ReplacedWaitingConnectionDoesNotLoseThePart) {
+  start(1);
+  RawClient a(port_);
+  ASSERT_TRUE(a.connected);
+  ASSERT_TRUE(a.send("GET,1\n"));
+  std::this_thread::sleep_for(100ms);
+  RawClient b(port_);  // same address, slots full: replaces a
+  ASSERT_TRUE(b.connected);
+  EXPECT_EQ(a.readUntil(')', 1000ms), "") << "a was closed, not answered";
+  publish(9, {part(300)});
+  ASSERT_TRUE(b.send("GET,1\n"));
+  EXPECT_EQ(b.readUntil(')').rfind(urPart(9, 300), 0), 0u);
+  EXPECT_EQ(clients(), 1u);
+}
+
+// A robot that closed only its sending side still reads: the reply reaches it and counts.
+TEST_F(robot_delivery, HalfClosedWaitingRobotGetsThePartOnce) {
+  start();
+  RawClient a(port_);
+  ASSERT_TRUE(a.connected);
+  ASSERT_TRUE(a.send("GET,1\n"));
+  ::shutdown(a.fd, SHUT_WR);
+  std::this_thread::sleep_for(100ms);
+  publish(10, {part(400)});
+  const std::string got = a.readUntil(')');
+  EXPECT_EQ(got.rfind(urPart(10, 400), 0), 0u) << got;
+  std::this_thread::sleep_for(200ms);
+  RawClient b(port_);
+  ASSERT_TRUE(b.send("GET,1\n"));
+  EXPECT_EQ(b.readUntil(')').substr(0, 3), "(3,") << "delivered once";
+}
+
+}  // namespace
+}  // namespace vgr::daemon
