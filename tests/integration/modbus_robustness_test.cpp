@@ -4,6 +4,7 @@
 // kept; FC17 (report server id) does not reveal the library. Peers: libmodbus clients and
 // raw TCP sockets.
 #include "protocol/modbus_server.hpp"
+#include "tests/support/raw_tcp_client.hpp"
 
 #include <arpa/inet.h>
 #include <netinet/in.h>
@@ -33,57 +34,7 @@ using namespace std::chrono_literals;
 using namespace modbus;
 using Clock = std::chrono::steady_clock;
 
-struct RawSocket {
-  // `from`: the local address to connect from (any 127.x.y.z works on loopback).
-  explicit RawSocket(std::uint16_t port, const char* from = nullptr) : fd(::socket(AF_INET, SOCK_STREAM, 0)) {
-    if (from != nullptr && fd >= 0) {
-      sockaddr_in l{};
-      l.sin_family = AF_INET;
-      inet_pton(AF_INET, from, &l.sin_addr);
-      ::bind(fd, reinterpret_cast<sockaddr*>(&l), sizeof l);
-    }
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_port = htons(port);
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    connected = fd >= 0 && ::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0;
-  }
-  ~RawSocket() {
-    if (fd >= 0) ::close(fd);
-  }
-  RawSocket(const RawSocket&) = delete;
-  RawSocket& operator=(const RawSocket&) = delete;
-  bool send(std::string_view bytes) const { return ::send(fd, bytes.data(), bytes.size(), MSG_NOSIGNAL) == std::ssize(bytes); }
-  // One reply: what arrives within `timeout`, until 100 ms pass without data.
-  std::string recvSome(std::chrono::milliseconds timeout) const {
-    std::string out;
-    const auto end = Clock::now() + timeout;
-    while (Clock::now() < end) {
-      pollfd p{fd, POLLIN, 0};
-      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(end - Clock::now()).count();
-      if (::poll(&p, 1, out.empty() ? static_cast<int>(left) : 100) <= 0) break;
-      std::array<char, 512> buf{};
-      const auto n = ::recv(fd, buf.data(), buf.size(), 0);
-      if (n <= 0) break;
-      out.append(buf.data(), static_cast<std::size_t>(n));
-    }
-    return out;
-  }
-  // True when the server closed the connection within `timeout`.
-  bool closedWithin(std::chrono::milliseconds timeout) const {
-    const auto end = Clock::now() + timeout;
-    for (;;) {
-      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(end - Clock::now()).count();
-      if (left <= 0) return false;
-      pollfd p{fd, POLLIN, 0};
-      if (::poll(&p, 1, static_cast<int>(left)) <= 0) return false;
-      std::array<char, 512> buf{};
-      if (::recv(fd, buf.data(), buf.size(), 0) <= 0) return true;
-    }
-  }
-  int fd;
-  bool connected = false;
-};
+using RawSocket = vgr::test::TestSocket;
 
 struct LibmodbusClient {
   explicit LibmodbusClient(std::uint16_t port) : ctx(modbus_new_tcp("127.0.0.1", port)) {
@@ -160,7 +111,7 @@ ReadStats timeReads(LibmodbusClient& c, std::chrono::milliseconds duration) {
 TEST_F(modbus_robustness, DribblingClientDoesNotStallOtherClientsOrTheHeartbeat) {
   startServer();
   LibmodbusClient good(port_);
-  ASSERT_TRUE(good.connected);
+  ASSERT_TRUE(good.connected());
   const ReadStats idle = timeReads(good, 2500ms);
   ASSERT_EQ(idle.failures, 0);
 
@@ -170,7 +121,7 @@ TEST_F(modbus_robustness, DribblingClientDoesNotStallOtherClientsOrTheHeartbeat)
     const std::string frame("\x00\x01\x00\x00\x00\x06\x01\x04\x00\x10\x00\x01", 12);
     while (!stop) {
       RawSocket s(port_);
-      if (!s.connected) break;
+      if (!s.connected()) break;
       for (std::size_t i = 0; !stop; i = (i + 1) % frame.size()) {
         if (!s.send(frame.substr(i, 1))) break;
         ++dribbled;
@@ -200,7 +151,7 @@ TEST_F(modbus_robustness, DribblingClientDoesNotStallOtherClientsOrTheHeartbeat)
 TEST_F(modbus_robustness, UnsupportedFunctionCodesGetException01AndTheConnectionStays) {
   startServer();
   RawSocket raw(port_);
-  ASSERT_TRUE(raw.connected);
+  ASSERT_TRUE(raw.connected());
   // FC43/14 read device identification, FC07 read exception status, FC65 user-defined,
   // FC08 diagnostics with data.
   const std::vector<std::string> requests = {
@@ -228,7 +179,7 @@ TEST_F(modbus_robustness, UnsupportedFunctionCodesGetException01AndTheConnection
 TEST_F(modbus_robustness, Fc17IsAnsweredWithException01NotTheLibraryVersion) {
   startServer();
   LibmodbusClient c(port_);
-  ASSERT_TRUE(c.connected);
+  ASSERT_TRUE(c.connected());
   std::array<std::uint8_t, 256> id{};
   EXPECT_EQ(modbus_report_slave_id(c.ctx, static_cast<int>(id.size()), id.data()), -1);
   EXPECT_EQ(errno, EMBXILFUN) << modbus_strerror(errno);
@@ -240,7 +191,7 @@ TEST_F(modbus_robustness, Fc17IsAnsweredWithException01NotTheLibraryVersion) {
 TEST_F(modbus_robustness, PipelinedAndSplitRequestsAreAnsweredInOrder) {
   startServer();
   RawSocket raw(port_);
-  ASSERT_TRUE(raw.connected);
+  ASSERT_TRUE(raw.connected());
   std::string batch;
   for (int t = 1; t <= 20; ++t) {
     batch += std::string("\x00", 1) + static_cast<char>(t) + std::string("\x00\x00\x00\x06\x01\x04\x00\x10\x00\x01", 10);
@@ -266,15 +217,15 @@ TEST_F(modbus_robustness, PipelinedAndSplitRequestsAreAnsweredInOrder) {
 TEST_F(modbus_robustness, LyingLengthAndStalledFramesAreDropped) {
   startServer();
   RawSocket lying(port_);  // FC04 with MBAP length 10 (4 bytes too many)
-  ASSERT_TRUE(lying.connected);
+  ASSERT_TRUE(lying.connected());
   ASSERT_TRUE(lying.send(std::string("\x00\x01\x00\x00\x00\x0A\x01\x04\x00\x10\x00\x01\x00\x00\x00\x00", 16)));
   EXPECT_TRUE(lying.closedWithin(1000ms));
   RawSocket huge(port_);  // MBAP length 1000: more than any ADU
-  ASSERT_TRUE(huge.connected);
+  ASSERT_TRUE(huge.connected());
   ASSERT_TRUE(huge.send(std::string("\x00\x01\x00\x00\x03\xE8\x01\x10", 8)));
   EXPECT_TRUE(huge.closedWithin(1000ms));
   RawSocket stalled(port_);
-  ASSERT_TRUE(stalled.connected);
+  ASSERT_TRUE(stalled.connected());
   ASSERT_TRUE(stalled.send(std::string("\x00\x01\x00\x00\x00\x06\x01", 7)));
   const auto t0 = Clock::now();
   EXPECT_TRUE(stalled.closedWithin(2000ms));
@@ -293,7 +244,7 @@ TEST_F(modbus_robustness, IdleConnectionsAreClosedAfterTheIdleTimeout) {
   startServer(o);
   RawSocket poller(port_);
   RawSocket idle1(port_), idle2(port_);
-  ASSERT_TRUE(poller.connected && idle1.connected && idle2.connected);
+  ASSERT_TRUE(poller.connected() && idle1.connected() && idle2.connected());
   std::this_thread::sleep_for(50ms);
   {
     RawSocket refused(port_);  // full
@@ -308,7 +259,7 @@ TEST_F(modbus_robustness, IdleConnectionsAreClosedAfterTheIdleTimeout) {
   EXPECT_TRUE(idle1.closedWithin(100ms));
   EXPECT_TRUE(idle2.closedWithin(100ms));
   RawSocket next(port_);
-  ASSERT_TRUE(next.connected);
+  ASSERT_TRUE(next.connected());
   ASSERT_TRUE(next.send(kReadStatus));
   EXPECT_EQ(next.recvSome(1000ms).size(), 11u) << "the freed slot serves a new PLC";
 }
@@ -320,11 +271,11 @@ TEST_F(modbus_robustness, OnlyAllowedClientsAreServed) {
   o.allowedClients = {"127.0.0.2"};
   startServer(o);
   RawSocket stranger(port_, "127.0.0.1");
-  ASSERT_TRUE(stranger.connected);
+  ASSERT_TRUE(stranger.connected());
   stranger.send(kReadStatus);
   EXPECT_TRUE(stranger.closedWithin(1000ms));
   RawSocket plc(port_, "127.0.0.2");
-  ASSERT_TRUE(plc.connected);
+  ASSERT_TRUE(plc.connected());
   ASSERT_TRUE(plc.send(kReadStatus));
   EXPECT_EQ(plc.recvSome(1000ms).size(), 11u);
 }

@@ -24,6 +24,7 @@
 
 #include "daemon/result_store.hpp"
 #include "protocol/robot_server.hpp"
+#include "tests/support/raw_tcp_client.hpp"
 
 namespace vgr::daemon {
 namespace {
@@ -32,45 +33,7 @@ using namespace std::chrono_literals;
 namespace asio = boost::asio;
 using Clock = std::chrono::steady_clock;
 
-struct RawClient {
-  explicit RawClient(std::uint16_t port) : fd(::socket(AF_INET, SOCK_STREAM, 0)) {
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_port = htons(port);
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    connected = fd >= 0 && ::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0;
-  }
-  ~RawClient() { close(); }
-  RawClient(const RawClient&) = delete;
-  RawClient& operator=(const RawClient&) = delete;
-  bool send(std::string_view s) const { return ::send(fd, s.data(), s.size(), MSG_NOSIGNAL) == std::ssize(s); }
-  void close() {
-    if (fd >= 0) ::close(fd);
-    fd = -1;
-  }
-  void reset() {  // close with RST
-    linger l{1, 0};
-    ::setsockopt(fd, SOL_SOCKET, SO_LINGER, &l, sizeof l);
-    close();
-  }
-  // Reads up to and including `end`, or "" after `timeout`.
-  std::string readUntil(char end, std::chrono::milliseconds timeout = 3000ms) const {
-    std::string out;
-    const auto until = Clock::now() + timeout;
-    while (Clock::now() < until) {
-      pollfd p{fd, POLLIN, 0};
-      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(until - Clock::now()).count();
-      if (::poll(&p, 1, static_cast<int>(left)) <= 0) break;
-      char c = 0;
-      if (::recv(fd, &c, 1, 0) != 1) break;
-      out.push_back(c);
-      if (c == end) return out;
-    }
-    return out;
-  }
-  int fd;
-  bool connected = false;
-};
+using RawClient = vgr::test::TestSocket;
 
 PartResult part(double x) {
   PartResult p;
@@ -150,7 +113,7 @@ TEST_F(robot_delivery, WaitingConnectionClosedBeforeTheResultDoesNotLoseThePart)
   start();
   {
     RawClient a(port_);
-    ASSERT_TRUE(a.connected);
+    ASSERT_TRUE(a.connected());
     ASSERT_TRUE(a.send("GET,1\n"));  // waits: no result yet
     std::this_thread::sleep_for(100ms);
   }  // the robot program is aborted: FIN
@@ -158,7 +121,7 @@ TEST_F(robot_delivery, WaitingConnectionClosedBeforeTheResultDoesNotLoseThePart)
   publish(7, {part(100)});
   std::this_thread::sleep_for(300ms);
   RawClient b(port_);
-  ASSERT_TRUE(b.connected);
+  ASSERT_TRUE(b.connected());
   ASSERT_TRUE(b.send("GET,1\n"));
   const std::string got = b.readUntil(')');
   EXPECT_EQ(got.rfind(urPart(7, 100), 0), 0u) << "the part went to the closed connection: " << got;
@@ -170,7 +133,7 @@ TEST_F(robot_delivery, WaitingConnectionResetBeforeTheResultDoesNotLoseThePart) 
   start();
   {
     RawClient a(port_);
-    ASSERT_TRUE(a.connected);
+    ASSERT_TRUE(a.connected());
     ASSERT_TRUE(a.send("GET,1\n"));
     std::this_thread::sleep_for(100ms);
     a.reset();
@@ -178,7 +141,7 @@ TEST_F(robot_delivery, WaitingConnectionResetBeforeTheResultDoesNotLoseThePart) 
   std::this_thread::sleep_for(100ms);
   publish(8, {part(200), part(201)});
   RawClient b(port_);
-  ASSERT_TRUE(b.connected);
+  ASSERT_TRUE(b.connected());
   ASSERT_TRUE(b.send("GET,1\n"));
   EXPECT_EQ(b.readUntil(')').rfind(urPart(8, 200), 0), 0u);
   ASSERT_TRUE(b.send("GET,1\n"));
@@ -191,11 +154,11 @@ TEST_F(robot_delivery, WaitingConnectionResetBeforeTheResultDoesNotLoseThePart) 
 TEST_F(robot_delivery, ReplacedWaitingConnectionDoesNotLoseThePart) {
   start(1);
   RawClient a(port_);
-  ASSERT_TRUE(a.connected);
+  ASSERT_TRUE(a.connected());
   ASSERT_TRUE(a.send("GET,1\n"));
   std::this_thread::sleep_for(100ms);
   RawClient b(port_);  // same address, slots full: replaces a
-  ASSERT_TRUE(b.connected);
+  ASSERT_TRUE(b.connected());
   EXPECT_EQ(a.readUntil(')', 1000ms), "") << "a was closed, not answered";
   publish(9, {part(300)});
   ASSERT_TRUE(b.send("GET,1\n"));
@@ -207,9 +170,9 @@ TEST_F(robot_delivery, ReplacedWaitingConnectionDoesNotLoseThePart) {
 TEST_F(robot_delivery, HalfClosedWaitingRobotGetsThePartOnce) {
   start();
   RawClient a(port_);
-  ASSERT_TRUE(a.connected);
+  ASSERT_TRUE(a.connected());
   ASSERT_TRUE(a.send("GET,1\n"));
-  ::shutdown(a.fd, SHUT_WR);
+  a.shutdownWrite();
   std::this_thread::sleep_for(100ms);
   publish(10, {part(400)});
   const std::string got = a.readUntil(')');

@@ -22,6 +22,7 @@
 #include <boost/asio/post.hpp>
 
 #include "protocol/robot_server.hpp"
+#include "tests/support/raw_tcp_client.hpp"
 
 namespace vgr::protocol {
 namespace {
@@ -30,48 +31,11 @@ using namespace std::chrono_literals;
 namespace asio = boost::asio;
 using Clock = std::chrono::steady_clock;
 
-struct RawClient {
-  RawClient(std::uint16_t port, const char* from) : fd(::socket(AF_INET, SOCK_STREAM, 0)) {
-    sockaddr_in l{};
-    l.sin_family = AF_INET;
-    inet_pton(AF_INET, from, &l.sin_addr);
-    ::bind(fd, reinterpret_cast<sockaddr*>(&l), sizeof l);
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_port = htons(port);
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    connected = fd >= 0 && ::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0;
-  }
-  ~RawClient() {
-    if (fd >= 0) ::close(fd);
-  }
-  RawClient(const RawClient&) = delete;
-  RawClient& operator=(const RawClient&) = delete;
-  bool send(std::string_view s) const { return ::send(fd, s.data(), s.size(), MSG_NOSIGNAL) == std::ssize(s); }
-  std::string readUntil(char end, std::chrono::milliseconds timeout = 2000ms) const {
-    std::string out;
-    const auto until = Clock::now() + timeout;
-    while (Clock::now() < until) {
-      pollfd p{fd, POLLIN, 0};
-      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(until - Clock::now()).count();
-      if (::poll(&p, 1, static_cast<int>(left)) <= 0) break;
-      char c = 0;
-      if (::recv(fd, &c, 1, 0) != 1) break;
-      out.push_back(c);
-      if (c == end) return out;
-    }
-    return out;
-  }
-  bool closedWithin(std::chrono::milliseconds timeout) const {
-    pollfd p{fd, POLLIN, 0};
-    if (::poll(&p, 1, static_cast<int>(timeout.count())) <= 0) return false;
-    char c = 0;
-    return ::recv(fd, &c, 1, MSG_DONTWAIT) <= 0;
-  }
+// A robot connection (from a chosen local address) that can poll once.
+struct RawClient : vgr::test::TestSocket {
+  RawClient(std::uint16_t port, const char* from) : TestSocket(port, from) {}
   // One GET,1 and its reply.
-  bool get() const { return send("GET,1\n") && readUntil(')').rfind("(0,1,", 0) == 0; }
-  int fd;
-  bool connected = false;
+  bool get() { return send("GET,1\n") && readUntil(')', 2000ms).rfind("(0,1,", 0) == 0; }
 };
 
 class robot_slots : public ::testing::Test {
@@ -125,7 +89,7 @@ TEST_F(robot_slots, SilentConnectionsAreClosedAfterTheIdleTimeoutAndFreeTheirSlo
   start(3, 300);
   RawClient poller(port_, "127.0.0.1");
   RawClient idle1(port_, "127.0.0.1"), idle2(port_, "127.0.0.1");
-  ASSERT_TRUE(poller.connected && idle1.connected && idle2.connected);
+  ASSERT_TRUE(poller.connected() && idle1.connected() && idle2.connected());
   std::this_thread::sleep_for(50ms);
   {
     RawClient other(port_, "127.0.0.2");  // full, another address: refused
@@ -139,7 +103,7 @@ TEST_F(robot_slots, SilentConnectionsAreClosedAfterTheIdleTimeoutAndFreeTheirSlo
   EXPECT_TRUE(idle1.closedWithin(100ms));
   EXPECT_TRUE(idle2.closedWithin(100ms));
   RawClient other(port_, "127.0.0.2");
-  ASSERT_TRUE(other.connected);
+  ASSERT_TRUE(other.connected());
   EXPECT_TRUE(other.get()) << "a freed slot serves another robot";
   EXPECT_TRUE(poller.get());
 }
@@ -149,14 +113,14 @@ TEST_F(robot_slots, SilentConnectionsAreClosedAfterTheIdleTimeoutAndFreeTheirSlo
 TEST_F(robot_slots, ReconnectReplacesTheSilentConnectionNotTheLiveOne) {
   start(2, 0);
   RawClient live(port_, "127.0.0.1");
-  ASSERT_TRUE(live.connected);
+  ASSERT_TRUE(live.connected());
   ASSERT_TRUE(live.get());
   RawClient silent(port_, "127.0.0.1");
-  ASSERT_TRUE(silent.connected);
+  ASSERT_TRUE(silent.connected());
   std::this_thread::sleep_for(100ms);
   ASSERT_TRUE(live.get());
   RawClient again(port_, "127.0.0.1");
-  ASSERT_TRUE(again.connected);
+  ASSERT_TRUE(again.connected());
   EXPECT_TRUE(silent.closedWithin(1000ms));
   EXPECT_TRUE(live.get()) << "the live connection was replaced";
   EXPECT_TRUE(again.get());

@@ -210,4 +210,20 @@ std::uint16_t freeLoopbackPort() {
   return ok ? ntohs(a.sin_port) : 0;
 }
 
+TestSocket::TestSocket(std::uint16_t port, const char* from)
+    : RawTcpClient(port, [from] {
+        Options o;
+        o.from = from;
+        o.throwOnFailure = false;
+        o.readTimeout = std::chrono::milliseconds(3000);
+        return o;
+      }()) {}
+
+std::string TestSocket::recvSome(std::chrono::milliseconds timeout) {
+  std::string out = readOnce(4096, timeout).value_or("");
+  if (out.empty()) return out;
+  while (auto more = readOnce(4096, std::chrono::milliseconds(100))) out += *more;
+  return out;
+}
+
 }  // namespace vgr::test

@@ -78,6 +78,22 @@ class RawTcpClient {
   std::string pending_;
 };
 
+// RawTcpClient as the protocol-robustness tests use it (robot_delivery, robot_slots,
+// modbus_robustness): connecting never throws (connected() says whether it worked), reads
+// give "" instead of nullopt.
+class TestSocket : public RawTcpClient {
+ public:
+  explicit TestSocket(std::uint16_t port, const char* from = nullptr);
+  // Up to and including `stop`, or "" on timeout / close.
+  std::string readUntil(char stop, std::chrono::milliseconds timeout = kDefault) {
+    return RawTcpClient::readUntil(stop, timeout).value_or("");
+  }
+  // One reply of unknown length: what arrives within `timeout`, until 100 ms pass without data.
+  std::string recvSome(std::chrono::milliseconds timeout);
+  // True when the peer closes within `timeout`.
+  bool closedWithin(std::chrono::milliseconds timeout) { return waitClosed(timeout); }
+};
+
 // True when nothing listens on 127.0.0.1:port.
 bool loopbackPortFree(std::uint16_t port);
 // A loopback TCP port nobody listens on now (the kernel's pick); 0 when none could be had.
