@@ -386,6 +386,17 @@ void parseSim(Section s, SimConfig& c) {
   s.finish();
 }
 
+void parseWeb(Section s, WebConfig& w) {
+  if (!s.node() || s.node().IsNull()) return;
+  w.enabled = true;
+  s.read<bool>("enabled", w.enabled);
+  s.read<std::string>("bind", w.bind, validIpAddress, "a numeric IP address");
+  int port = w.port;
+  s.read<int>("port", port, inRange(1, 65535), "[1, 65535]");
+  w.port = static_cast<std::uint16_t>(port);
+  s.finish();
+}
+
 CellConfig parse(const YAML::Node& root, const std::string& file) {
   CellConfig c;
   c.sourcePath = file;
@@ -442,6 +453,7 @@ CellConfig parse(const YAML::Node& root, const std::string& file) {
     const YAML::Node cal = top.get("calibration");
     parseCalibration(Section(file, cal, "calibration"), c.calibration, cal, file);
   }
+  parseWeb(Section(file, top.get("web"), "web"), c.web);
   top.finish();
   return c;
 }

@@ -175,6 +175,14 @@ struct CalibrationFilesConfig {
   std::string multiHeight; // multiheight.yaml (paper 001, section 4.1); excludes the three above
 };
 
+// vgrd's HTTP server (daemon/web_server.hpp): /metrics for Prometheus, read-only. Off
+// unless the `web` section is present (then on unless `enabled: false`).
+struct WebConfig {
+  bool enabled = false;
+  std::string bind = "127.0.0.1";  // numeric IPv4/IPv6 address; 0.0.0.0 for a plant network
+  std::uint16_t port = 8080;       // [1, 65535]
+};
+
 struct CellConfig {
   std::string sourcePath;           // file it was loaded from
   std::string name = "cell";
@@ -188,6 +196,7 @@ struct CellConfig {
   std::vector<JobConfig> jobs;
   SimConfig sim;
   CalibrationFilesConfig calibration;  // optional section `calibration`
+  WebConfig web;                       // optional section `web`
 
   const JobConfig* findJob(int id) const;
 };
