@@ -5,6 +5,7 @@
 #include "daemon/camera_worker.hpp"
 #include "daemon/cycle_runner.hpp"
 #include "daemon/metrics.hpp"
+#include "daemon/mqtt_sink.hpp"
 #include "daemon/web_server.hpp"
 
 namespace vgr::daemon {
@@ -32,6 +33,7 @@ Plant::~Plant() { stop(); }
 
 Result<void> Plant::start(PlantSources src) {
   using T = SampledMetric::Type;
+  sources_ = src;
   if (src.camera != nullptr) {
     const CameraWorker* camera = src.camera;
     metrics_->addSampler([camera](std::vector<SampledMetric>& out) {
@@ -87,14 +89,60 @@ Result<void> Plant::start(PlantSources src) {
     if (auto r = web_->start(); !r) return r;
     log::info("main", "{} serving /metrics", web_->describe());
   }
+
+  if (cell_.mqtt.enabled) {
+    mqtt_ = std::make_unique<MqttSink>(cell_.mqtt, cell_.name, buildVersion());
+    lastJob_ = cell_.jobs.empty() ? 0 : cell_.jobs.front().id;
+    pollStatus();  // the status is known before the first connect
+    if (auto r = mqtt_->start(); !r) return r;
+    MqttSink* mqtt = mqtt_.get();
+    metrics_->addSampler([mqtt](std::vector<SampledMetric>& out) {
+      const MqttCounters c = mqtt->counters();
+      out.push_back({"vgr_mqtt_published_total", "Results the MQTT broker acknowledged", T::Counter, {},
+                     static_cast<double>(c.published)});
+      out.push_back({"vgr_mqtt_dropped_total", "Results dropped from the full MQTT queue", T::Counter, {},
+                     static_cast<double>(c.dropped)});
+      out.push_back({"vgr_mqtt_connects_total", "Connections made to the MQTT broker", T::Counter, {},
+                     static_cast<double>(c.connects)});
+      out.push_back({"vgr_mqtt_queued", "Results waiting for the MQTT broker", T::Gauge, {}, static_cast<double>(c.queued)});
+      out.push_back({"vgr_mqtt_connected", "1 while connected to the MQTT broker", T::Gauge, {}, c.connected ? 1.0 : 0.0});
+    });
+    statusTimer_ = std::make_unique<boost::asio::steady_timer>(io_);
+    statusTimer_->expires_after(std::chrono::seconds(1));
+    statusTimer_->async_wait([this](const boost::system::error_code& ec) {
+      if (!ec) pollStatus();
+    });
+  }
   return {};
+}
+
+void Plant::pollStatus() {
+  // I/O thread: the retained status follows READY, the camera and the job (published on change).
+  MqttStatus st;
+  st.ready = sources_.ready ? sources_.ready() : false;
+  st.camera = sources_.camera != nullptr && sources_.camera->streaming();
+  st.job = lastJob_.load();
+  mqtt_->setStatus(st);
+  if (!statusTimer_) return;
+  statusTimer_->expires_after(std::chrono::seconds(1));
+  statusTimer_->async_wait([this](const boost::system::error_code& ec) {
+    if (!ec) pollStatus();
+  });
 }
 
 void Plant::stop() {
   if (web_) web_->stop();
+  if (statusTimer_) statusTimer_->cancel();
+  if (mqtt_) mqtt_->stop();
 }
 
-void Plant::cycleDone(const CycleResult& r) { metrics_->cycleDone(r); }
+void Plant::cycleDone(const CycleResult& r) {
+  metrics_->cycleDone(r);
+  if (mqtt_) {
+    lastJob_ = r.jobId;
+    mqtt_->publishResult(r);
+  }
+}
 
 std::uint32_t Plant::triggered(TriggerSource source, std::uint32_t cycleId) {
   metrics_->triggered(source, cycleId != 0);

@@ -1,12 +1,14 @@
 // vgrd's plant interfaces in one place, so the daemon's wiring (vgrd_app.cpp) only calls
 // in: the Prometheus metrics (daemon/metrics.hpp) served by the web server
-// (daemon/web_server.hpp) on the cell's `web` address. docs/plant.md has the names.
+// (daemon/web_server.hpp) on the cell's `web` address, and the MQTT sink
+// (daemon/mqtt_sink.hpp) when the cell has an `mqtt` section. docs/plant.md has the names.
 //
 // Threads: construct, start() and stop() on the I/O thread (or before it runs);
 // cycleDone() on the cycle thread; triggered() on any thread; countReplies() wraps a
 // robot's reply callback on the I/O thread. None of them blocks or touches the network.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -19,15 +21,14 @@
 #include "core/result.hpp"
 #include "protocol/robot_server.hpp"
 
-namespace boost::asio {
-class io_context;
-}
+#include <boost/asio/steady_timer.hpp>
 
 namespace vgr::daemon {
 
 class CameraWorker;
 class CycleRunner;
 class Metrics;
+class MqttSink;
 class WebServer;
 
 // What the metrics sample at scrape time (I/O thread). Borrowed: they outlive the Plant's
@@ -46,7 +47,7 @@ class Plant {
   Plant(const Plant&) = delete;
   Plant& operator=(const Plant&) = delete;
 
-  // Starts the web server when the config has a `web` section; the error names its address.
+  // Starts the web server and the MQTT sink the config asks for; the error names which.
   Result<void> start(PlantSources sources);
   void stop();
 
@@ -66,6 +67,11 @@ class Plant {
   const config::CellConfig& cell_;
   std::unique_ptr<Metrics> metrics_;
   std::unique_ptr<WebServer> web_;
+  std::unique_ptr<MqttSink> mqtt_;
+  std::unique_ptr<boost::asio::steady_timer> statusTimer_;  // MQTT status, every second
+  std::atomic<int> lastJob_{0};
+  PlantSources sources_;
+  void pollStatus();
 };
 
 }  // namespace vgr::daemon

@@ -1,0 +1,145 @@
+// vgrd's MQTT sink (docs/plant.md) against a real broker: `mosquitto -c FILE` on a free
+// loopback port, `mosquitto_sub` as the client (Debian mosquitto, mosquitto-clients).
+// N cycles triggered by a libmodbus PLC -> N result messages, each cycle once, matching
+// the journal; the retained status says online; kill -9 of vgrd -> the will ("offline").
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <map>
+
+#include "modbus_cell.hpp"
+
+namespace {
+
+using namespace std::chrono_literals;
+using vgr::test::ModbusCell;
+
+int freePort() {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  socklen_t len = sizeof a;
+  int port = 0;
+  if (::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0 &&
+      ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len) == 0)
+    port = ntohs(a.sin_port);
+  ::close(fd);
+  return port;
+}
+
+class mqtt_vgrd : public ModbusCell {
+ protected:
+  // mosquitto_sub -v prints "TOPIC PAYLOAD" per message.
+  struct Message {
+    std::string topic;
+    nlohmann::json payload;
+  };
+
+  void startBroker() {
+    port_ = freePort();
+    ASSERT_GT(port_, 0);
+    brokerDir_ = std::filesystem::temp_directory_path() / ("vgr-mqtt-" + std::to_string(::getpid()));
+    std::filesystem::create_directories(brokerDir_);
+    const auto conf = brokerDir_ / "mosquitto.conf";
+    std::ofstream(conf) << "listener " << port_ << " 127.0.0.1\nallow_anonymous true\npersistence false\n";
+    auto p = vgr::daemon::ChildProcess::spawn({"/usr/sbin/mosquitto", "-c", conf.string()}, (brokerDir_ / "broker.log").string());
+    ASSERT_TRUE(p.has_value());
+    broker_ = std::make_unique<vgr::daemon::ChildProcess>(std::move(*p));
+    for (int i = 0; i < 100 && portFree(port_); ++i) std::this_thread::sleep_for(20ms);
+    ASSERT_FALSE(portFree(port_)) << "mosquitto did not listen on " << port_;
+  }
+
+  void startSubscriber() {
+    auto p = vgr::daemon::ChildProcess::spawn({"/usr/bin/mosquitto_sub", "-h", "127.0.0.1", "-p", std::to_string(port_),
+                                               "-q", "1", "-v", "-t", "vgr/sim-cell/#"},
+                                              (brokerDir_ / "sub.log").string());
+    ASSERT_TRUE(p.has_value());
+    sub_ = std::make_unique<vgr::daemon::ChildProcess>(std::move(*p));
+  }
+
+  std::optional<Message> next(std::chrono::milliseconds timeout) {
+    auto line = sub_->readLine(timeout);
+    if (!line) return std::nullopt;
+    const auto sp = line->find(' ');
+    Message m{line->substr(0, sp), nlohmann::json::parse(sp == std::string::npos ? "" : line->substr(sp + 1), nullptr, false)};
+    return m;
+  }
+
+  std::string mqttSection() const {
+    return "\nmqtt:\n  host: 127.0.0.1\n  port: " + std::to_string(port_) +
+           "\n  prefix: vgr\n  reconnect_min_s: 1\n  reconnect_max_s: 2\n";
+  }
+
+  void TearDown() override {
+    sub_.reset();
+    ModbusCell::TearDown();
+    broker_.reset();
+    std::error_code ec;
+    if (!HasFailure()) std::filesystem::remove_all(brokerDir_, ec);
+  }
+
+  int port_ = 0;
+  std::filesystem::path brokerDir_;
+  std::unique_ptr<vgr::daemon::ChildProcess> broker_, sub_;
+};
+
+TEST_F(mqtt_vgrd, every_cycle_once_and_the_will_on_kill_9) {
+  ASSERT_NO_FATAL_FAILURE(startBroker());
+  ASSERT_NO_FATAL_FAILURE(startSubscriber());
+  ASSERT_NO_FATAL_FAILURE(startCell([this](std::string yaml) { return yaml + mqttSection(); }));
+
+  // The retained status comes first: online, with the version.
+  std::optional<Message> status;
+  for (auto m = next(5s); m; m = next(5s)) {
+    if (m->topic == "vgr/sim-cell/status" && m->payload.value("state", "") == "online") {
+      status = m;
+      break;
+    }
+  }
+  ASSERT_TRUE(status.has_value()) << log("vgrd.log");
+  EXPECT_FALSE(status->payload.value("version", "").empty());
+
+  constexpr int kCycles = 10;
+  modbus_t* ctx = modbus_new_tcp("127.0.0.1", kModbusPort);
+  ASSERT_NE(ctx, nullptr);
+  ASSERT_EQ(modbus_connect(ctx), 0);
+  for (int i = 1; i <= kCycles; ++i) {
+    const auto r = triggerCounter(ctx, static_cast<std::uint16_t>(200 + i), 5s);
+    ASSERT_TRUE(r.status & 0x08) << "RESULT_VALID, cycle " << i;
+  }
+  modbus_close(ctx);
+  modbus_free(ctx);
+
+  std::map<std::uint32_t, nlohmann::json> results;  // by cycle id
+  int messages = 0;
+  const auto until = Clock::now() + 10s;
+  while (messages < kCycles && Clock::now() < until) {
+    auto m = next(500ms);
+    if (!m || m->topic != "vgr/sim-cell/result") continue;
+    ASSERT_TRUE(m->payload.is_object());
+    ++messages;
+    results[m->payload["cycle"].get<std::uint32_t>()] = m->payload;
+  }
+  EXPECT_EQ(messages, kCycles);
+  EXPECT_EQ(results.size(), static_cast<std::size_t>(kCycles)) << "a cycle arrived twice";
+  for (std::uint32_t id = 1; id <= kCycles; ++id) {
+    const nlohmann::json j = journalEntry(id);
+    ASSERT_FALSE(j.is_null());
+    ASSERT_TRUE(results.count(id)) << "cycle " << id << " never arrived";
+    EXPECT_EQ(results[id], j) << "the message is the journal line";
+  }
+  // No more than N.
+  for (auto m = next(300ms); m; m = next(300ms)) EXPECT_NE(m->topic, "vgr/sim-cell/result") << m->payload;
+
+  // kill -9: no clean disconnect, the broker publishes the will.
+  vgrd_->kill9();
+  bool offline = false;
+  for (auto m = next(5s); m && !offline; m = next(5s))
+    offline = m->topic == "vgr/sim-cell/status" && m->payload.value("state", "") == "offline";
+  EXPECT_TRUE(offline) << "no will after kill -9";
+}
+
+}  // namespace
