@@ -11,6 +11,7 @@
 #include <CLI/CLI.hpp>
 
 #include "config/cell_config.hpp"
+#include "core/version.hpp"
 #include "daemon/calibrate.hpp"
 #include "daemon/demo.hpp"
 #include "daemon/grab.hpp"
@@ -18,6 +19,7 @@
 
 int main(int argc, char** argv) {
   CLI::App app{"vgr: vision-guided robotics tool"};
+  app.set_version_flag("--version", std::string("vgr ") + vgr::buildVersion());
   app.require_subcommand(1);
 
   vgr::daemon::DemoOptions demo;
