@@ -36,9 +36,10 @@ Result<void> Plant::start(PlantSources src) {
   sources_ = src;
   if (src.camera != nullptr) {
     const CameraWorker* camera = src.camera;
-    metrics_->addSampler([camera](std::vector<SampledMetric>& out) {
+    const std::string cameraName = cell_.camera.name;
+    metrics_->addSampler([camera, cameraName](std::vector<SampledMetric>& out) {
       const CameraCounters c = camera->counters();
-      const std::vector<std::pair<std::string, std::string>> l = {{"camera", camera->describe()}};
+      const std::vector<std::pair<std::string, std::string>> l = {{"camera", cameraName}};
       auto add = [&](const char* name, const char* help, double v, T type = T::Counter) {
         out.push_back({name, help, type, l, v});
       };
