@@ -1,6 +1,5 @@
 #include "daemon/web_server.hpp"
 
-#include <atomic>
 #include <chrono>
 #include <optional>
 #include <set>
