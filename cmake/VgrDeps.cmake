@@ -12,6 +12,10 @@ find_package(nlohmann_json 3 REQUIRED)
 pkg_check_modules(ARAVIS REQUIRED IMPORTED_TARGET aravis-0.8)
 pkg_check_modules(MODBUS REQUIRED IMPORTED_TARGET libmodbus)
 pkg_check_modules(SYSTEMD REQUIRED IMPORTED_TARGET libsystemd)
+# vgrd's plant interfaces (docs/plant.md): prometheus-cpp's core library only (its text
+# serializer behind our own Beast server, not prometheus-cpp-pull), and libmosquitto.
+find_package(prometheus-cpp REQUIRED CONFIG)  # Debian 1.0.1; its config file has no version
+pkg_check_modules(MOSQUITTO REQUIRED IMPORTED_TARGET libmosquitto)
 
 # OpenCV's config exports include dirs, not SYSTEM targets: wrap them so -Werror stays on our code.
 add_library(vgr_opencv INTERFACE)

@@ -298,6 +298,51 @@ void parseSim(Section s, SimConfig& c) {
   s.finish();
 }
 
+void parseWeb(Section s, WebConfig& w) {
+  if (!s.node() || s.node().IsNull()) return;
+  w.enabled = true;
+  s.read<bool>("enabled", w.enabled);
+  s.read<std::string>("bind", w.bind, validIpAddress, "a numeric IP address");
+  int port = w.port;
+  s.read<int>("port", port, inRange(1, 65535), "[1, 65535]");
+  w.port = static_cast<std::uint16_t>(port);
+  s.finish();
+}
+
+void parseMqtt(Section s, MqttConfig& m) {
+  if (!s.node() || s.node().IsNull()) return;
+  m.enabled = true;
+  s.read<bool>("enabled", m.enabled);
+  s.read<std::string>("host", m.host, [](const std::string& v) { return !v.empty(); }, "a host name or address");
+  int port = m.port;
+  s.read<int>("port", port, inRange(1, 65535), "[1, 65535]");
+  m.port = static_cast<std::uint16_t>(port);
+  s.read<std::string>("prefix", m.prefix,
+                      [](const std::string& v) {
+                        return !v.empty() && v.back() != '/' && v.find_first_of("#+") == std::string::npos;
+                      },
+                      "a non-empty topic level path without '#', '+' or a trailing '/'");
+  s.read<std::string>("client_id", m.clientId);
+  s.read<std::string>("username", m.username);
+  s.read<std::string>("password", m.password);
+  if (!m.password.empty() && m.username.empty()) s.fail(s.get("password"), "password", "needs a username");
+  Section tls(s.file(), s.get("tls"), s.join("tls"));
+  tls.read<std::string>("ca_file", m.tlsCaFile);
+  tls.read<std::string>("cert_file", m.tlsCertFile);
+  tls.read<std::string>("key_file", m.tlsKeyFile);
+  tls.read<bool>("insecure", m.tlsInsecure);
+  if (m.tlsCertFile.empty() != m.tlsKeyFile.empty()) tls.fail(tls.node(), "key_file", "cert_file and key_file go together");
+  if (!m.tlsCertFile.empty() && m.tlsCaFile.empty()) tls.fail(tls.node(), "ca_file", "a client certificate needs ca_file");
+  tls.finish();
+  s.read<int>("keepalive_s", m.keepaliveS, inRange(5, 3600), "[5, 3600]");
+  s.read<int>("queue", m.queueCapacity, inRange(1, 1000000), "[1, 1000000]");
+  s.read<int>("reconnect_min_s", m.reconnectMinS, inRange(1, 3600), "[1, 3600]");
+  s.read<int>("reconnect_max_s", m.reconnectMaxS, inRange(1, 3600), "[1, 3600]");
+  if (m.reconnectMaxS < m.reconnectMinS)
+    s.fail(s.get("reconnect_max_s"), "reconnect_max_s", "must not be below reconnect_min_s");
+  s.finish();
+}
+
 CellConfig parse(const YAML::Node& root, const std::string& file) {
   CellConfig c;
   c.sourcePath = file;
@@ -354,6 +399,8 @@ CellConfig parse(const YAML::Node& root, const std::string& file) {
     const YAML::Node cal = top.get("calibration");
     parseCalibration(Section(file, cal, "calibration"), c.calibration, cal, file);
   }
+  parseWeb(Section(file, top.get("web"), "web"), c.web);
+  parseMqtt(Section(file, top.get("mqtt"), "mqtt"), c.mqtt);
   top.finish();
   return c;
 }

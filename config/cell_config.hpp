@@ -178,6 +178,35 @@ struct CalibrationFilesConfig {
   std::string multiHeight; // multiheight.yaml (paper 001, section 4.1); excludes the three above
 };
 
+// vgrd's HTTP server (daemon/web_server.hpp): /metrics for Prometheus, read-only. Off
+// unless the `web` section is present (then on unless `enabled: false`).
+struct WebConfig {
+  bool enabled = false;
+  std::string bind = "127.0.0.1";  // numeric IPv4/IPv6 address; 0.0.0.0 for a plant network
+  std::uint16_t port = 8080;       // [1, 65535]
+};
+
+// vgrd's MQTT sink (daemon/mqtt_sink.hpp, docs/plant.md): every result as JSON on
+// <prefix>/<cell>/result (QoS 1), a retained <prefix>/<cell>/status with a Last Will. Off
+// unless the `mqtt` section is present (then on unless `enabled: false`).
+struct MqttConfig {
+  bool enabled = false;
+  std::string host = "127.0.0.1";  // broker host name or address
+  std::uint16_t port = 1883;       // [1, 65535]
+  std::string prefix = "vgr";      // topic prefix: non-empty, no '#', '+' or trailing '/'
+  std::string clientId;            // "" = "vgrd-<cell.name>"
+  std::string username;            // "" = anonymous
+  std::string password;
+  std::string tlsCaFile;           // tls.ca_file: TLS on when set
+  std::string tlsCertFile;         // tls.cert_file + tls.key_file: client certificate (both or neither)
+  std::string tlsKeyFile;
+  bool tlsInsecure = false;        // tls.insecure: skip the host name check (testing only)
+  int keepaliveS = 30;             // s, [5, 3600]
+  int queueCapacity = 1000;        // results, [1, 1000000]: waiting while the broker is away; the oldest is dropped (counted)
+  int reconnectMinS = 1;           // s, [1, 3600]: first back-off, doubling up to reconnect_max_s
+  int reconnectMaxS = 30;          // s, [reconnect_min_s, 3600]
+};
+
 struct CellConfig {
   std::string sourcePath;           // file it was loaded from
   std::string name = "cell";
@@ -191,6 +220,8 @@ struct CellConfig {
   std::vector<JobConfig> jobs;
   SimConfig sim;
   CalibrationFilesConfig calibration;  // optional section `calibration`
+  WebConfig web;                       // optional section `web`
+  MqttConfig mqtt;                     // optional section `mqtt`
 
   const JobConfig* findJob(int id) const;
 };

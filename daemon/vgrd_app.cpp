@@ -18,6 +18,7 @@
 #include "daemon/plc_links.hpp"
 #include "daemon/result_store.hpp"
 #include "drivers/camera.hpp"
+#include "daemon/plant.hpp"
 #include "drivers/camera_worker.hpp"
 #include "protocol/modbus_map.hpp"  // modbusResultFrom
 #include "protocol/robot_server.hpp"
@@ -41,6 +42,7 @@ struct VgrdApp::Impl {
   // The PLC side: the Modbus server and/or client mode, behind one interface.
   std::vector<std::unique_ptr<protocol::PlcLink>> plcs;
   std::vector<std::unique_ptr<protocol::RobotServer>> robots;
+  std::unique_ptr<Plant> plant;  // metrics + web server (daemon/plant.hpp)
   bool notifiedReady = false;
   std::uint64_t watchdogUsec = 0;
 
@@ -51,6 +53,7 @@ struct VgrdApp::Impl {
     // thread), then the journal (disk) last. A PLC gets the results of the cycles it
     // triggered (a robot's or the operator's cycle would raise RESULT_VALID for a trigger
     // the PLC never sent); robots and the journal get every result.
+    plant->cycleDone(r);
     if (r.trigger == TriggerSource::Modbus && !plcs.empty()) {
       const protocol::ModbusResult m = protocol::modbusResultFrom(r);
       for (auto& plc : plcs) plc->publishResult(m);
@@ -71,7 +74,7 @@ struct VgrdApp::Impl {
     // SIGUSR1 (`systemctl kill -s USR1 vgrd`): the operator triggers the first job once.
     operatorSignal.async_wait([this](const boost::system::error_code& ec, int) {
       if (ec) return;
-      const std::uint32_t id = cycles->submit(0, TriggerSource::Operator);
+      const std::uint32_t id = plant->triggered(TriggerSource::Operator, cycles->submit(0, TriggerSource::Operator));
       if (id == 0) log::warn("cycle", "operator trigger refused: queue full");
       else log::info("cycle", "operator trigger: cycle {}", id);
       waitOperatorTrigger();
@@ -130,6 +133,7 @@ VgrdApp::~VgrdApp() {
   if (impl_->cycles) impl_->cycles->stop();
   if (impl_->camera) impl_->camera->stop();
   for (auto& r : impl_->robots) r->stop();
+  if (impl_->plant) impl_->plant->stop();
 }
 
 Result<void> VgrdApp::start() {
@@ -143,7 +147,10 @@ Result<void> VgrdApp::start() {
   std::set<int> jobs;
   for (const auto& j : s.cfg.jobs) jobs.insert(j.id);
   s.results = std::make_unique<ResultStore>(s.io, jobs);
-  s.results->setTrigger([&s](int jobId) { return s.cycles->submit(jobId, TriggerSource::Robot); });
+  s.plant = std::make_unique<Plant>(s.io, s.cfg);
+  s.results->setTrigger([&s](int jobId) {
+    return s.plant->triggered(TriggerSource::Robot, s.cycles->submit(jobId, TriggerSource::Robot));
+  });
 
   CycleSinks sinks;
   sinks.onStarted = [&s](std::uint32_t id, int job) { asio::post(s.io, [&s, id, job] { s.results->onCycleStarted(id, job); }); };
@@ -180,16 +187,22 @@ Result<void> VgrdApp::start() {
 
     auto server = std::make_unique<protocol::RobotServer>(
         s.io, ep, [&s](const std::string& robot, const protocol::RobotRequest& req, protocol::ReplyFn reply) {
-          s.results->handle(robot, req, std::move(reply));
+          s.results->handle(robot, req, s.plant->countReplies(robot, std::move(reply)));
         });
     if (auto r = server->start(); !r) return r;
     s.robots.push_back(std::move(server));
   }
 
-  for (auto& plc : makePlcLinks(s.cfg, [&s](int jobId) { return s.cycles->submit(jobId, TriggerSource::Modbus); })) {
+  for (auto& plc : makePlcLinks(s.cfg, [&s](int jobId) {
+         return s.plant->triggered(TriggerSource::Modbus, s.cycles->submit(jobId, TriggerSource::Modbus));
+       })) {
     if (auto r = plc->start(); !r) return r;
     s.plcs.push_back(std::move(plc));
   }
+
+  PlantSources sources{s.camera.get(), s.cycles.get(), {}, [&s] { return s.notifiedReady; }};
+  for (const auto& r : s.robots) sources.robots.push_back(r.get());
+  if (auto r = s.plant->start(std::move(sources)); !r) return r;
 
   s.camera->start();
   s.cycles->start();

@@ -8,11 +8,13 @@
 
 #include "config/cell_config.hpp"
 #include "core/log.hpp"
+#include "core/version.hpp"
 #include "daemon/check.hpp"
 #include "daemon/vgrd_app.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"vgrd: vision-guided robotics daemon"};
+  app.set_version_flag("--version", std::string("vgrd ") + vgr::buildVersion());
   std::string configPath = "/etc/vgr/cell.yaml";
   std::string journalPath;
   std::string logLevel;

@@ -12,6 +12,8 @@ PACKAGES=(
   python3-serial-asyncio  # pymodbus 3.0 imports it at "from pymodbus.client import ..." but only Recommends it
   libboost-dev libspdlog-dev libfmt-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
   libsystemd-dev systemd
+  prometheus-cpp-dev python3-prometheus-client  # vgrd's /metrics; the test parses it with the Python parser
+  libmosquitto-dev mosquitto mosquitto-clients  # vgrd's MQTT sink; the test runs a broker and mosquitto_sub
   iproute2  # camera_multi_test adds 127.0.0.2 to lo for a second emulated camera
   libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev

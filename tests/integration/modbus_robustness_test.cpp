@@ -111,7 +111,7 @@ ReadStats timeReads(LibmodbusClient& c, std::chrono::milliseconds duration) {
 TEST_F(modbus_robustness, DribblingClientDoesNotStallOtherClientsOrTheHeartbeat) {
   startServer();
   LibmodbusClient good(port_);
-  ASSERT_TRUE(good.connected());
+  ASSERT_TRUE(good.connected);
   const ReadStats idle = timeReads(good, 2500ms);
   ASSERT_EQ(idle.failures, 0);
 
@@ -179,7 +179,7 @@ TEST_F(modbus_robustness, UnsupportedFunctionCodesGetException01AndTheConnection
 TEST_F(modbus_robustness, Fc17IsAnsweredWithException01NotTheLibraryVersion) {
   startServer();
   LibmodbusClient c(port_);
-  ASSERT_TRUE(c.connected());
+  ASSERT_TRUE(c.connected);
   std::array<std::uint8_t, 256> id{};
   EXPECT_EQ(modbus_report_slave_id(c.ctx, static_cast<int>(id.size()), id.data()), -1);
   EXPECT_EQ(errno, EMBXILFUN) << modbus_strerror(errno);
@@ -272,7 +272,7 @@ TEST_F(modbus_robustness, OnlyAllowedClientsAreServed) {
   startServer(o);
   RawSocket stranger(port_, "127.0.0.1");
   ASSERT_TRUE(stranger.connected());
-  stranger.send(kReadStatus);
+  (void)stranger.send(kReadStatus);  // may already be refused: the close below is what counts
   EXPECT_TRUE(stranger.closedWithin(1000ms));
   RawSocket plc(port_, "127.0.0.2");
   ASSERT_TRUE(plc.connected());

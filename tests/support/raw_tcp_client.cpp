@@ -226,4 +226,14 @@ std::string TestSocket::recvSome(std::chrono::milliseconds timeout) {
   return out;
 }
 
+std::string httpRequest(std::uint16_t port, const std::string& method, const std::string& target,
+                        std::chrono::milliseconds timeout) {
+  RawTcpClient::Options o;
+  o.throwOnFailure = false;
+  RawTcpClient c(port, o);
+  if (!c.connected() || !c.send(method + " " + target + " HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n"))
+    return "";
+  return c.readBytes(std::string::npos, timeout);  // up to the server's close
+}
+
 }  // namespace vgr::test

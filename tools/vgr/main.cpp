@@ -13,6 +13,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "core/version.hpp"
+
 #include "tools/vgr/calibrate_handeye.hpp"
 #include "tools/vgr/calibrate_intrinsics.hpp"
 #include "tools/vgr/calibrate_plane.hpp"
@@ -51,6 +53,7 @@ struct Entry {
 int main(int argc, char** argv) {
   namespace tools = vgr::tools;
   CLI::App app{"vgr: vision-guided robotics tool"};
+  app.set_version_flag("--version", std::string("vgr ") + vgr::buildVersion());
   app.require_subcommand(1);
 
   // Every subcommand, in the order `vgr --help` lists them.

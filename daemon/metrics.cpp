@@ -1,0 +1,167 @@
+#include "daemon/metrics.hpp"
+
+#include <array>
+#include <map>
+#include <sstream>
+
+#include <prometheus/counter.h>
+#include <prometheus/family.h>
+#include <prometheus/gauge.h>
+#include <prometheus/histogram.h>
+#include <prometheus/registry.h>
+#include <prometheus/text_serializer.h>
+
+namespace vgr::daemon {
+
+namespace {
+
+constexpr Status kStatuses[] = {Status::Ok,          Status::NoPartFound,       Status::ResultNotReady,
+                                Status::NoNewTrigger, Status::UnknownCommand,    Status::BadArgument,
+                                Status::BusyOverrun,  Status::CameraError,       Status::ProcessingTimeout,
+                                Status::NotCalibrated, Status::JobNotFound,      Status::Internal,
+                                Status::OffsetOutOfLimits};
+constexpr std::size_t kStatusCount = sizeof kStatuses / sizeof kStatuses[0];
+constexpr TriggerSource kSources[] = {TriggerSource::Modbus, TriggerSource::Robot, TriggerSource::Operator};
+
+std::size_t statusIndex(Status s) {
+  for (std::size_t i = 0; i < kStatusCount; ++i)
+    if (kStatuses[i] == s) return i;
+  return kStatusCount - 2;  // Internal
+}
+
+// Seconds: a cycle is ~10-100 ms when all is well, up to the cycle deadline (<= 60 s) when not.
+const prometheus::Histogram::BucketBoundaries kSecondsBuckets = {0.005, 0.01, 0.02, 0.05, 0.1, 0.2,
+                                                                 0.5,   1.0,  2.0,  5.0,  10.0, 60.0};
+
+}  // namespace
+
+struct Metrics::Impl {
+  prometheus::Registry registry;
+  struct JobSeries {
+    prometheus::Counter* cycles[kStatusCount] = {};
+    prometheus::Histogram* seconds = nullptr;
+  };
+  std::map<int, JobSeries> jobs;   // built in the constructor, read-only afterwards
+  JobSeries otherJob;              // a cycle whose job id is not configured (JOB_NOT_FOUND)
+  prometheus::Histogram* grab = nullptr;
+  prometheus::Histogram* locate = nullptr;
+  prometheus::Counter* parts = nullptr;
+  prometheus::Counter* triggers[3] = {};
+  prometheus::Counter* overruns[3] = {};
+  std::map<std::string, std::array<prometheus::Counter*, kStatusCount>> robotReplies;
+  std::vector<MetricSampler> samplers;
+
+  void makeJob(prometheus::Family<prometheus::Counter>& cycles, prometheus::Family<prometheus::Histogram>& seconds,
+               const std::string& job, JobSeries& out) {
+    for (std::size_t i = 0; i < kStatusCount; ++i)
+      out.cycles[i] = &cycles.Add({{"job", job}, {"status", std::string(statusName(kStatuses[i]))}});
+    out.seconds = &seconds.Add({{"job", job}}, kSecondsBuckets);
+  }
+};
+
+Metrics::Metrics(const std::string& cell, const std::vector<int>& jobIds, const std::vector<std::string>& robots,
+                 const std::string& version)
+    : impl_(std::make_unique<Impl>()) {
+  auto& reg = impl_->registry;
+  prometheus::BuildGauge()
+      .Name("vgr_build_info")
+      .Help("vgrd's version (git describe); the value is always 1")
+      .Register(reg)
+      .Add({{"version", version}, {"cell", cell}})
+      .Set(1);
+  auto& cycles = prometheus::BuildCounter()
+                     .Name("vgr_cycles_total")
+                     .Help("Cycles finished (one per accepted trigger), by job and status (the status table's name)")
+                     .Register(reg);
+  auto& seconds = prometheus::BuildHistogram()
+                      .Name("vgr_cycle_seconds")
+                      .Help("Trigger to result, seconds, by job")
+                      .Register(reg);
+  for (int id : jobIds) impl_->makeJob(cycles, seconds, std::to_string(id), impl_->jobs[id]);
+  impl_->makeJob(cycles, seconds, "unknown", impl_->otherJob);
+  auto& stages = prometheus::BuildHistogram()
+                     .Name("vgr_cycle_stage_seconds")
+                     .Help("Time of one stage of the cycle, seconds: grab (trigger to frame), locate (localization)")
+                     .Register(reg);
+  impl_->grab = &stages.Add({{"stage", "grab"}}, kSecondsBuckets);
+  impl_->locate = &stages.Add({{"stage", "locate"}}, kSecondsBuckets);
+  impl_->parts = &prometheus::BuildCounter()
+                      .Name("vgr_parts_found_total")
+                      .Help("Parts located, summed over all cycles")
+                      .Register(reg)
+                      .Add({});
+  auto& triggers = prometheus::BuildCounter()
+                       .Name("vgr_triggers_total")
+                       .Help("Triggers accepted into the cycle queue, by source (modbus, robot, operator)")
+                       .Register(reg);
+  auto& overruns = prometheus::BuildCounter()
+                       .Name("vgr_trigger_overruns_total")
+                       .Help("Triggers refused because the cycle queue was full (answered BUSY_OVERRUN), by source")
+                       .Register(reg);
+  for (std::size_t i = 0; i < 3; ++i) {
+    impl_->triggers[i] = &triggers.Add({{"source", triggerSourceName(kSources[i])}});
+    impl_->overruns[i] = &overruns.Add({{"source", triggerSourceName(kSources[i])}});
+  }
+  auto& replies = prometheus::BuildCounter()
+                      .Name("vgr_robot_replies_total")
+                      .Help("Replies sent to robots, by robot endpoint and status")
+                      .Register(reg);
+  for (const auto& robot : robots) {
+    auto& row = impl_->robotReplies[robot];
+    for (std::size_t i = 0; i < kStatusCount; ++i)
+      row[i] = &replies.Add({{"robot", robot}, {"status", std::string(statusName(kStatuses[i]))}});
+  }
+}
+
+Metrics::~Metrics() = default;
+
+void Metrics::cycleDone(const CycleResult& r) {
+  const auto it = impl_->jobs.find(r.jobId);
+  const Impl::JobSeries& job = it != impl_->jobs.end() ? it->second : impl_->otherJob;
+  job.cycles[statusIndex(r.status)]->Increment();
+  job.seconds->Observe(r.totalMs / 1000.0);
+  impl_->grab->Observe(r.grabMs / 1000.0);
+  impl_->locate->Observe(r.locateMs / 1000.0);
+  if (!r.parts.empty()) impl_->parts->Increment(static_cast<double>(r.parts.size()));
+}
+
+void Metrics::triggered(TriggerSource source, bool accepted) {
+  const auto i = static_cast<std::size_t>(source);
+  if (i >= 3) return;
+  (accepted ? impl_->triggers[i] : impl_->overruns[i])->Increment();
+}
+
+void Metrics::robotReplied(const std::string& robot, Status status) {
+  const auto it = impl_->robotReplies.find(robot);
+  if (it != impl_->robotReplies.end()) it->second[statusIndex(status)]->Increment();
+}
+
+void Metrics::addSampler(MetricSampler sampler) { impl_->samplers.push_back(std::move(sampler)); }
+
+std::string Metrics::render() const {
+  std::vector<prometheus::MetricFamily> families = impl_->registry.Collect();
+  std::vector<SampledMetric> sampled;
+  for (const auto& s : impl_->samplers) s(sampled);
+  // One family per name, in the order first seen.
+  std::map<std::string, std::size_t> byName;
+  for (const auto& m : sampled) {
+    auto [it, added] = byName.try_emplace(m.name, families.size());
+    if (added) {
+      prometheus::MetricFamily f;
+      f.name = m.name;
+      f.help = m.help;
+      f.type = m.type == SampledMetric::Type::Counter ? prometheus::MetricType::Counter : prometheus::MetricType::Gauge;
+      families.push_back(std::move(f));
+    }
+    prometheus::ClientMetric c;
+    for (const auto& [k, v] : m.labels) c.label.push_back({k, v});
+    if (m.type == SampledMetric::Type::Counter) c.counter.value = m.value;
+    else c.gauge.value = m.value;
+    families[it->second].metric.push_back(std::move(c));
+  }
+  std::ostringstream out;
+  prometheus::TextSerializer().Serialize(out, families);
+  return out.str();
+}
+
+}  // namespace vgr::daemon
