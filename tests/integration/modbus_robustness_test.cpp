@@ -5,6 +5,7 @@
 // raw TCP sockets.
 #include "protocol/modbus_server.hpp"
 #include "tests/support/raw_tcp_client.hpp"
+#include "tests/support/libmodbus_client.hpp"
 
 #include <arpa/inet.h>
 #include <netinet/in.h>
@@ -36,23 +37,7 @@ using Clock = std::chrono::steady_clock;
 
 using RawSocket = vgr::test::TestSocket;
 
-struct LibmodbusClient {
-  explicit LibmodbusClient(std::uint16_t port) : ctx(modbus_new_tcp("127.0.0.1", port)) {
-    if (ctx != nullptr) {
-      modbus_set_response_timeout(ctx, 1, 0);
-      connected = modbus_connect(ctx) == 0;
-    }
-  }
-  ~LibmodbusClient() {
-    if (ctx == nullptr) return;
-    modbus_close(ctx);
-    modbus_free(ctx);
-  }
-  LibmodbusClient(const LibmodbusClient&) = delete;
-  LibmodbusClient& operator=(const LibmodbusClient&) = delete;
-  modbus_t* ctx;
-  bool connected = false;
-};
+using vgr::test::LibmodbusClient;
 
 class modbus_robustness : public ::testing::Test {
  protected:

@@ -12,6 +12,7 @@
 
 #include "tests/support/command.hpp"
 #include "tests/support/raw_tcp_client.hpp"
+#include "tests/support/libmodbus_client.hpp"
 
 #include <array>
 #include <atomic>
@@ -334,25 +335,7 @@ class ModbusServerTest : public ::testing::Test {
   std::uint16_t port_ = 0;
 };
 
-// A libmodbus client, for "another client keeps working".
-struct LibmodbusClient {
-  explicit LibmodbusClient(std::uint16_t port) : ctx(modbus_new_tcp("127.0.0.1", port)) {
-    if (ctx != nullptr) {
-      modbus_set_response_timeout(ctx, 1, 0);
-      connected = modbus_connect(ctx) == 0;
-    }
-  }
-  ~LibmodbusClient() {
-    if (ctx == nullptr) return;
-    modbus_close(ctx);
-    modbus_free(ctx);
-  }
-  LibmodbusClient(const LibmodbusClient&) = delete;
-  LibmodbusClient& operator=(const LibmodbusClient&) = delete;
-  int readStatus(std::uint16_t& s) const { return modbus_read_input_registers(ctx, kStatus, 1, &s); }
-  modbus_t* ctx;
-  bool connected = false;
-};
+using vgr::test::LibmodbusClient;
 
 // A raw TCP socket to the server.
 class RawSocket : public test::RawTcpClient {

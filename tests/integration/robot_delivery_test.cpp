@@ -24,6 +24,7 @@
 
 #include "daemon/result_store.hpp"
 #include "protocol/robot_server.hpp"
+#include "tests/support/io_thread.hpp"
 #include "tests/support/raw_tcp_client.hpp"
 
 namespace vgr::daemon {
@@ -45,7 +46,7 @@ PartResult part(double x) {
 class robot_delivery : public ::testing::Test {
  protected:
   void start(std::size_t maxClients = 8) {
-    store_ = std::make_unique<ResultStore>(io_, std::set<int>{1});
+    store_ = std::make_unique<ResultStore>(io_.io(), std::set<int>{1});
     store_->addRobot("ur", RobotPolicy{1, 800, PartOrder::BestScore, 0});
     protocol::RobotEndpoint ep;
     ep.name = "ur";
@@ -54,31 +55,21 @@ class robot_delivery : public ::testing::Test {
     ep.port = 0;
     ep.maxClients = maxClients;
     server_ = std::make_unique<protocol::RobotServer>(
-        io_, ep, [this](const std::string& robot, const protocol::RobotRequest& req, protocol::ReplyFn reply) {
+        io_.io(), ep, [this](const std::string& robot, const protocol::RobotRequest& req, protocol::ReplyFn reply) {
           store_->handle(robot, req, std::move(reply));
         });
     ASSERT_TRUE(server_->start());
     port_ = server_->port();
-    thread_ = std::thread([this] { io_.run(); });
+    io_.start();
+    started_ = true;
   }
   void TearDown() override {
-    if (thread_.joinable()) {
-      onIo([this] { server_->stop(); });
-      work_.reset();
-      io_.stop();
-      thread_.join();
-    }
+    if (started_) io_.run([this] { server_->stop(); });
+    io_.stop();
     server_.reset();
     store_.reset();
   }
-  void onIo(const std::function<void()>& f) {
-    std::promise<void> done;
-    asio::post(io_, [&] {
-      f();
-      done.set_value();
-    });
-    done.get_future().wait();
-  }
+  void onIo(const std::function<void()>& f) { io_.run(f); }
   void publish(std::uint32_t cycle, std::vector<PartResult> parts) {
     CycleResult r;
     r.cycleId = cycle;
@@ -96,12 +87,11 @@ class robot_delivery : public ::testing::Test {
     return n;
   }
 
-  asio::io_context io_;
-  asio::executor_work_guard<asio::io_context::executor_type> work_ = asio::make_work_guard(io_);
+  vgr::test::IoThread io_;  // the I/O thread, as vgrd's
+  bool started_ = false;
   std::unique_ptr<ResultStore> store_;
   std::unique_ptr<protocol::RobotServer> server_;
   std::uint16_t port_ = 0;
-  std::thread thread_;
 };
 
 // UR reply: (status,cycle,x,y,z,rx,ry,rz); x in metres with 6 decimals (part() takes mm).

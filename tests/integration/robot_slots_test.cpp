@@ -22,6 +22,7 @@
 #include <boost/asio/post.hpp>
 
 #include "protocol/robot_server.hpp"
+#include "tests/support/io_thread.hpp"
 #include "tests/support/raw_tcp_client.hpp"
 
 namespace vgr::protocol {
@@ -48,41 +49,30 @@ class robot_slots : public ::testing::Test {
     ep.port = 0;
     ep.maxClients = maxClients;
     ep.idleTimeoutMs = idleTimeoutMs;
-    server_ = std::make_unique<RobotServer>(io_, ep, [](const std::string&, const RobotRequest& req, ReplyFn reply) {
+    server_ = std::make_unique<RobotServer>(io_.io(), ep, [](const std::string&, const RobotRequest& req, ReplyFn reply) {
       RobotReply r;
       r.cycleId = static_cast<std::uint32_t>(req.job);
       reply(r);
     });
     ASSERT_TRUE(server_->start());
     port_ = server_->port();
-    thread_ = std::thread([this] { io_.run(); });
+    io_.start();
+    started_ = true;
   }
   void TearDown() override {
-    if (thread_.joinable()) {
-      onIo([this] { server_->stop(); });
-      work_.reset();
-      io_.stop();
-      thread_.join();
-    }
+    if (started_) io_.run([this] { server_->stop(); });
+    io_.stop();
   }
-  void onIo(const std::function<void()>& f) {
-    std::promise<void> done;
-    asio::post(io_, [&] {
-      f();
-      done.set_value();
-    });
-    done.get_future().wait();
-  }
+  void onIo(const std::function<void()>& f) { io_.run(f); }
   std::size_t clients() {
     std::size_t n = 0;
     onIo([&] { n = server_->clientCount(); });
     return n;
   }
-  asio::io_context io_;
-  asio::executor_work_guard<asio::io_context::executor_type> work_ = asio::make_work_guard(io_);
+  vgr::test::IoThread io_;  // the I/O thread, as vgrd's
+  bool started_ = false;
   std::unique_ptr<RobotServer> server_;
   std::uint16_t port_ = 0;
-  std::thread thread_;
 };
 
 TEST_F(robot_slots, SilentConnectionsAreClosedAfterTheIdleTimeoutAndFreeTheirSlots) {
