@@ -123,7 +123,8 @@ std::vector<int> parseSizes(const std::string& text) {
 }
 
 // Runs `locator` over the dataset; for every detection paired with a truth part calls
-// onPart(features, class index, detection), for every other detection onExtra(detection).
+// onPart(features, class index or -1 for a class not in `names`, detection), for every other
+// detection onExtra(detection).
 template <class OnPart, class OnExtra>
 Result<int> walk(const std::string& dir, const std::vector<TruthImage>& truth, const std::vector<std::string>& names,
                  vision::Locator& locator, int threshold, OnPart onPart, OnExtra onExtra, int& truthParts) {
@@ -145,10 +146,8 @@ Result<int> walk(const std::string& dir, const std::vector<TruthImage>& truth, c
         continue;
       }
       used[static_cast<std::size_t>(p.truth)] = true;
+      // c = -1: a truth part of a class the classifier does not know (a novel part).
       const int c = classOf(names, im.parts[static_cast<std::size_t>(p.truth)].label);
-      if (c < 0)
-        return fail(Status::BadArgument, fmt::format("{}/truth.csv: {}: label '{}' is not a class of the classifier", dir,
-                                                      im.image, im.parts[static_cast<std::size_t>(p.truth)].label));
       onPart((*blobs)[static_cast<std::size_t>(p.blob)].features, c, d);
     }
     truthParts += static_cast<int>(im.parts.size());
@@ -239,6 +238,7 @@ int runClassifyTrain(const ClassifyTrainOptions& o) {
   auto walked = walk(
       o.dataset, *truth, *names, **locator, o.threshold,
       [&](const cls::FeatureVector& f, int c, const vision::Detection&) {
+        if (c < 0) return;  // unreachable: names are the dataset's own labels
         x.push_back(f);
         y.push_back(c);
       },
@@ -281,11 +281,16 @@ int runClassifyEval(const ClassifyEvalOptions& o) {
 
   const std::size_t n = names.size();
   std::vector<std::vector<long>> m(n, std::vector<long>(n + 1, 0));  // [true][predicted], column n = unknown
-  long extraServed = 0, extraTotal = 0;
+  long extraServed = 0, extraTotal = 0, novelServed = 0, novelTotal = 0;
   int truthParts = 0;
   auto walked = walk(
       o.dataset, *truth, names, **locator, job->classify.threshold,
       [&](const cls::FeatureVector&, int c, const vision::Detection& d) {
+        if (c < 0) {  // a part of a class the classifier was not trained on: should be unknown
+          ++novelTotal;
+          if (d.label > 0) ++novelServed;
+          return;
+        }
         const std::size_t p = d.label >= 1 && d.label <= static_cast<int>(n) ? static_cast<std::size_t>(d.label - 1) : n;
         ++m[static_cast<std::size_t>(c)][p];
       },
@@ -329,6 +334,7 @@ int runClassifyEval(const ClassifyEvalOptions& o) {
   std::printf("accuracy (correct / classified) %.2f %%, accuracy with rejections as errors %.2f %%, macro F1 %.2f %%, reject rate %.2f %%\n",
               100 * accuracy, 100 * ratio(correct, double(found)), 100 * sums[4] / k, 100 * rejectRate);
   std::printf("other detections (not a truth part): %ld, of them given a class: %ld\n", extraTotal, extraServed);
+  if (novelTotal) std::printf("parts of classes the classifier does not know: %ld, of them given a class: %ld\n", novelTotal, novelServed);
   std::printf("confusion matrix (rows true, columns predicted, last = unknown):\n%-14s", "");
   for (std::size_t p = 0; p <= n; ++p) std::printf(" %8.8s", p < n ? names[p].c_str() : "unknown");
   std::printf("\n");
@@ -355,6 +361,8 @@ int runClassifyEval(const ClassifyEvalOptions& o) {
     j["reject_rate"] = rejectRate;
     j["other_detections"] = extraTotal;
     j["other_detections_classified"] = extraServed;
+    j["novel_parts"] = novelTotal;
+    j["novel_parts_classified"] = novelServed;
     j["classes"] = names;
     j["per_class"] = perClass;
     j["confusion"] = m;

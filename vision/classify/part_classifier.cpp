@@ -165,8 +165,11 @@ Prediction PartClassifier::predict(const FeatureVector& f, double minConfidence,
   }
   p.confidence = sum > 0 ? best * best / sum : 0;
   const int c = p.best - 1;
-  for (int k = 0; k < kFeatureCount; ++k)
+  // Not over h2..h7: for symmetric parts they are ~0 and their symlog is noise (part_features.hpp).
+  for (int k = 0; k < kFeatureCount; ++k) {
+    if (k >= 1 && k <= 6) continue;
     p.featureZ = std::max(p.featureZ, std::abs(f[k] - impl_->mean.at<float>(c, k)) / static_cast<double>(impl_->stddev.at<float>(c, k)));
+  }
   const bool novel = maxFeatureZ > 0 && p.featureZ > maxFeatureZ;
   p.label = (p.confidence >= minConfidence && !novel) ? p.best : 0;
   return p;

@@ -6,7 +6,7 @@
 //           paper 002 eq. 1 (sign(h) log|h|, the form matchShapes compares in eqs. 2-4) made
 //           continuous at h = 0, where symmetric parts' h3..h7 sit
 //   [7]     log10 area, px²        (zero-order moment M00, eq. 12)
-//   [8]     log10 outer perimeter, px
+//   [8]     log10 outer perimeter, px (of the contour simplified to 1 px: rotation invariant)
 //   [9]     compactness 4*pi*A / P² (1 for a disc)
 //   [10]    elongation: short / long side of the minimum-area rectangle
 //   [11]    solidity: area / convex hull area
