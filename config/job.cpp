@@ -87,6 +87,7 @@ JobFile parse(const YAML::Node& root, const std::string& file, const std::string
     j.classify.minConfidence = c.number("min_confidence", j.classify.minConfidence, 0, 1);
     j.classify.maxFeatureZ = c.number("max_feature_z", j.classify.maxFeatureZ, 0, 1e6);
     j.classify.threshold = c.integer("threshold", j.classify.threshold, 0, 255);
+    c.read<bool>("keep_unknown", j.classify.keepUnknown);
     c.finish(Section::UnknownKeys::Plain);
   }
 
@@ -179,8 +180,9 @@ std::string jobYaml(const JobFile& j) {
     y << YAML::Key << "classify" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "model" << YAML::Value
       << j.classify.model << YAML::Key << "min_confidence" << YAML::Value << numberText(j.classify.minConfidence)
       << YAML::Key << "max_feature_z" << YAML::Value << numberText(j.classify.maxFeatureZ) << YAML::Key << "threshold"
-      << YAML::Value << j.classify.threshold << YAML::EndMap
-      << YAML::Comment("part classifier (docs/classification.md); below min_confidence = label 0");
+      << YAML::Value << j.classify.threshold << YAML::Key << "keep_unknown" << YAML::Value << j.classify.keepUnknown
+      << YAML::EndMap
+      << YAML::Comment("part classifier (docs/classification.md); unsure parts dropped unless keep_unknown");
   }
   y << YAML::Newline << YAML::Comment("The method's parameters by name (docs/localization.md); unknown names are an error.");
   y << YAML::Key << "params" << YAML::Value;

@@ -20,6 +20,7 @@ Result<std::unique_ptr<vision::Locator>> makeJobLocator(const config::JobFile& j
   params.minConfidence = job.classify.minConfidence;
   params.maxFeatureZ = job.classify.maxFeatureZ;
   params.threshold = job.classify.threshold;
+  params.keepUnknown = job.classify.keepUnknown;
   return vision::classify::makeClassifyingLocator(std::move(*locator), std::move(*classifier), params);
 }
 

@@ -191,8 +191,10 @@ TEST(ClassifyingLocator, LabelsWhatTheMethodFinds) {
   trainingSet(x, y);
   auto model = cls::PartClassifier::train(x, y, kNames);
   ASSERT_TRUE(model.has_value());
-  // Three parts in one 800 x 400 image: a ring, a small square, a bar.
-  cv::Mat img(400, 800, CV_8UC1, cv::Scalar(30));
+  // Three parts in one 1000 x 400 image: a ring, a small square, a bar; and a triangle,
+  // which is none of the classes.
+  cv::Mat img(400, 1000, CV_8UC1, cv::Scalar(30));
+  cv::fillPoly(img, std::vector<std::vector<cv::Point>>{{{830, 260}, {950, 260}, {890, 150}}}, cv::Scalar(200));
   drawPart(1, 0, 200, 200).colRange(70, 330).copyTo(img.colRange(20, 280));
   drawPart(3, 25, 200, 200).colRange(70, 330).copyTo(img.colRange(280, 540));
   drawPart(4, 70, 200, 200).colRange(70, 330).copyTo(img.colRange(540, 800));
@@ -201,16 +203,27 @@ TEST(ClassifyingLocator, LabelsWhatTheMethodFinds) {
   mp.minAreaPx = 500;
   cls::ClassifyParams cp;
   cp.threshold = 100;
-  auto locator = cls::makeClassifyingLocator(vgr::vision::makeUntaughtMomentsLocator(mp), std::move(*model), cp);
+  auto locator = cls::makeClassifyingLocator(vgr::vision::makeUntaughtMomentsLocator(mp), *model, cp);
   EXPECT_EQ(locator->method(), "moments");
   auto out = locator->locate(img);
   ASSERT_TRUE(out.has_value());
+  // The unsure triangle is dropped: "not found", never served under a class.
   ASSERT_EQ(out->parts.size(), 3u);
   for (const auto& d : out->parts) {
     const int expected = d.u < 280 ? 2 : d.u < 540 ? 4 : 5;
     EXPECT_EQ(d.label, expected) << "part at u " << d.u;
     EXPECT_GE(d.confidence, 0.8);
   }
+  // keepUnknown: the triangle stays, as label 0.
+  cp.keepUnknown = true;
+  auto keeping = cls::makeClassifyingLocator(vgr::vision::makeUntaughtMomentsLocator(mp), std::move(*model), cp);
+  auto all = keeping->locate(img);
+  ASSERT_TRUE(all.has_value());
+  ASSERT_EQ(all->parts.size(), 4u);
+  for (const auto& d : all->parts)
+    if (d.u > 800) {
+      EXPECT_EQ(d.label, 0);
+    }
 }
 
 }  // namespace

@@ -276,6 +276,7 @@ int runClassifyEval(const ClassifyEvalOptions& o) {
   auto truth = readTruth(o.dataset);
   if (!truth) return badInput(truth.error().message);
   const std::vector<std::string>& names = model->classNames();
+  job->classify.keepUnknown = true;  // count the unsure parts (label 0) instead of losing them
   auto locator = daemon::makeJobLocator(*job);
   if (!locator) return badInput(locator.error().message);
 

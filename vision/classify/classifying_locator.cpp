@@ -3,6 +3,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -23,15 +24,18 @@ class ClassifyingLocator final : public Locator {
     if (!out || out->parts.empty()) return out;
     auto blobs = segmentParts(gray, params_.threshold, params_.minAreaPx);
     if (!blobs) return std::unexpected(blobs.error());
+    std::vector<Detection> kept;
     for (Detection& d : out->parts) {
       d.label = 0;
       d.confidence = 0;
-      const PartBlob* b = nearestBlob(*blobs, d);
-      if (!b) continue;
-      const Prediction p = classifier_.predict(b->features, params_.minConfidence, params_.maxFeatureZ);
-      d.label = p.label;
-      d.confidence = p.confidence;
+      if (const PartBlob* b = nearestBlob(*blobs, d)) {
+        const Prediction p = classifier_.predict(b->features, params_.minConfidence, params_.maxFeatureZ);
+        d.label = p.label;
+        d.confidence = p.confidence;
+      }
+      if (d.label > 0 || params_.keepUnknown) kept.push_back(d);
     }
+    out->parts = std::move(kept);
     return out;
   }
 
