@@ -5,7 +5,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <limits>
-#include <map>
+#include <stdexcept>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>

@@ -87,8 +87,11 @@ int runLocate(const LocateOptions& o) {
     std::printf("%s\n", j.dump().c_str());
   } else {
     std::printf("%s: %zu part(s) in %.1f ms (%s)\n", o.image.c_str(), out->parts.size(), ms, method.c_str());
-    for (const auto& d : out->parts)
-      std::printf("  x %.2f px  y %.2f px  angle %.2f deg  score %.3f\n", d.u, d.v, d.angleDeg, d.score);
+    for (const auto& d : out->parts) {
+      std::printf("  x %.2f px  y %.2f px  angle %.2f deg  score %.3f", d.u, d.v, d.angleDeg, d.score);
+      if (!job->classify.model.empty()) std::printf("  label %d (confidence %.3f)", d.label, d.confidence);
+      std::printf("\n");
+    }
   }
   return 0;
 }
