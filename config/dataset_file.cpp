@@ -27,6 +27,7 @@ std::string datasetYaml(const DatasetFile& d) {
   y << YAML::Key << "blur_sigma" << YAML::Value << fmt::format("{}", d.blurSigma);
   y << YAML::Key << "illum_ratio" << YAML::Value << fmt::format("{}", d.illumRatio);
   y << YAML::Key << "decoys" << YAML::Value << d.decoys;
+  if (!d.classes.empty()) y << YAML::Key << "classes" << YAML::Value << YAML::Flow << d.classes;
   y << YAML::Newline
     << YAML::Comment("Pinhole camera looking straight down; base frame origin on the plane under the optical centre.");
   y << YAML::Key << "camera" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "fx" << YAML::Value
@@ -60,6 +61,13 @@ Result<DatasetFile> loadDatasetFile(const std::string& path) {
     d.blurSigma = top.number("blur_sigma", d.blurSigma, 0, 1000);
     d.illumRatio = top.number("illum_ratio", d.illumRatio, 0, 1e6);
     d.decoys = top.integer("decoys", d.decoys, 0, 1024);
+    if (const YAML::Node c = top.get("classes"); c && !c.IsNull()) {
+      if (!c.IsSequence()) top.fail(c, "classes", "expected a list of class names");
+      for (std::size_t i = 0; i < c.size(); ++i) {
+        if (!c[i].IsScalar() || c[i].Scalar().empty()) top.fail(c[i], "classes", "expected a class name");
+        d.classes.push_back(c[i].Scalar());
+      }
+    }
     Section cam(path, top.get("camera"), "camera");
     cam.require("fx");
     d.fx = cam.number("fx", 0, 1e-9, 1e9);

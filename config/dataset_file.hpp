@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "core/result.hpp"
 
@@ -26,6 +27,9 @@ struct DatasetFile {
   int decoys = 0;
   double fx = 0, fy = 0, cx = 0, cy = 0;  // px
   double cameraHeightMm = 0;              // optical centre above the plane, mm
+  // `vgr sim render --classes`: the part classes mixed in the images, in label order (truth.csv
+  // then has a `label` column with the class name). Empty = one part, key not written.
+  std::vector<std::string> classes;
 };
 
 std::string datasetYaml(const DatasetFile& d);

@@ -79,6 +79,17 @@ JobFile parse(const YAML::Node& root, const std::string& file, const std::string
   j.referenceRzDeg = ref.number("rz_deg", 0, -360, 360);
   ref.finish(Section::UnknownKeys::Plain);
   j.calibration = top.text("calibration", "");
+  if (top.has("classify")) {
+    Section c(file, top.get("classify"), "classify");
+    c.require("model");
+    j.classify.model = c.text("model", "");
+    if (j.classify.model.empty()) c.fail(c.get("model"), "model", "expected a file name (the classifier YAML)");
+    j.classify.minConfidence = c.number("min_confidence", j.classify.minConfidence, 0, 1);
+    j.classify.maxFeatureZ = c.number("max_feature_z", j.classify.maxFeatureZ, 0, 1e6);
+    j.classify.threshold = c.integer("threshold", j.classify.threshold, 0, 255);
+    c.read<bool>("keep_unknown", j.classify.keepUnknown);
+    c.finish(Section::UnknownKeys::Plain);
+  }
 
   const YAML::Node params = top.get("params");
   if (params && !params.IsNull()) {
@@ -110,6 +121,9 @@ void emitPoint(YAML::Emitter& y, const PixelPoint& p) {
 std::string JobFile::templatePath() const { return (std::filesystem::path(folder) / templateImage).string(); }
 std::string JobFile::calibrationPath() const {
   return calibration.empty() ? std::string() : (std::filesystem::path(folder) / calibration).string();
+}
+std::string JobFile::classifierPath() const {
+  return classify.model.empty() ? std::string() : (std::filesystem::path(folder) / classify.model).string();
 }
 
 Result<JobFile> parseJob(const std::string& text, const std::string& sourceName, const std::string& folder) {
@@ -161,6 +175,15 @@ std::string jobYaml(const JobFile& j) {
     << numberText(j.referenceRzDeg) << YAML::EndMap << YAML::Comment("taught robot pose (base frame)");
   y << YAML::Key << "calibration" << YAML::Value << j.calibration
     << YAML::Comment("a cell config whose model maps px -> mm; empty = pixels only");
+  if (!j.classify.model.empty()) {
+    // Only when set, so jobs without a classifier are written exactly as before.
+    y << YAML::Key << "classify" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "model" << YAML::Value
+      << j.classify.model << YAML::Key << "min_confidence" << YAML::Value << numberText(j.classify.minConfidence)
+      << YAML::Key << "max_feature_z" << YAML::Value << numberText(j.classify.maxFeatureZ) << YAML::Key << "threshold"
+      << YAML::Value << j.classify.threshold << YAML::Key << "keep_unknown" << YAML::Value << j.classify.keepUnknown
+      << YAML::EndMap
+      << YAML::Comment("part classifier (docs/classification.md); unsure parts dropped unless keep_unknown");
+  }
   y << YAML::Newline << YAML::Comment("The method's parameters by name (docs/localization.md); unknown names are an error.");
   y << YAML::Key << "params" << YAML::Value;
   if (j.taught.params.empty()) y << YAML::Flow;

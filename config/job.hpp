@@ -31,8 +31,22 @@ struct JobFile {
   // multi-height map, else its `model`) maps pixels to the robot frame exactly as vgrd does;
   // empty = not calibrated (vgr locate then reports pixels only).
   std::string calibration;
+  // Optional (paper 002 Sec. 3, "MLP classifier"): a part classifier run on every part the
+  // method finds (docs/classification.md). job.yaml `classify: {model: classifier.yaml,
+  // min_confidence: 0.8, max_feature_z: 8, threshold: 0, keep_unknown: false}`; absent = no
+  // classifier (every part keeps label 0). A part the classifier is unsure of (below
+  // min_confidence, or features outside its class) is dropped ("not found"), or with
+  // keep_unknown kept with label 0 = unknown.
+  struct Classify {
+    std::string model;           // relative to folder; empty = no classifier
+    double minConfidence = 0.8;  // [0, 1]: paper 002 Sec. 4 used 0.96
+    double maxFeatureZ = 8;      // >= 0: features farther from the class mean (in its std) = unknown; 0 = off
+    int threshold = 0;           // gray level [0, 255] segmenting the part's blob; 0 = Otsu
+    bool keepUnknown = false;    // unsure parts: false = dropped, true = kept with label 0
+  } classify;
 
   std::string templatePath() const;
+  std::string classifierPath() const;  // empty when classify.model is empty
   std::string calibrationPath() const;  // empty when calibration is empty
 };
 

@@ -10,6 +10,7 @@
 #include "config/job.hpp"
 #include "core/log.hpp"
 #include "daemon/cell_mapping.hpp"
+#include "daemon/job_locator.hpp"
 #include "vision/locate/moments_locator.hpp"
 
 namespace vgr::daemon {
@@ -78,9 +79,7 @@ Result<void> CycleRunner::prepareJobs() {
     } else {
       auto jf = config::loadJob(job.folder);
       if (!jf) return std::unexpected(jf.error());
-      const cv::Mat templ = cv::imread(jf->templatePath(), cv::IMREAD_GRAYSCALE);
-      if (templ.empty()) return fail(Status::BadArgument, jf->templatePath() + ": cannot read the template image");
-      auto loc = vision::makeLocator(job.method, templ, jf->taught);
+      auto loc = makeJobLocator(*jf, job.method);  // + the job's classifier (paper 002), if any
       if (!loc) return fail(loc.error().code, fmt::format("job {} ({}): {}", job.id, job.folder, loc.error().message));
       prepared.locator = std::move(*loc);
     }

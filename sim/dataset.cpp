@@ -1,5 +1,6 @@
 #include "sim/dataset.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -13,8 +14,17 @@
 
 namespace vgr::sim {
 
-PartSceneRenderer datasetRenderer(const DatasetOptions& o) {
-  return PartSceneRenderer(o.part == "flat" ? PartModel::flat() : PartModel::multi(o.levels), o.scene);
+Result<PartSceneRenderer> datasetRenderer(const DatasetOptions& o) {
+  if (o.classes.empty()) return PartSceneRenderer(o.part == "flat" ? PartModel::flat() : PartModel::multi(o.levels), o.scene);
+  std::vector<PartModel> models;
+  for (const auto& name : o.classes) {
+    auto m = PartModel::byName(name);
+    if (!m) return fail(Status::BadArgument, "--classes: " + m.error().message);
+    if (std::any_of(models.begin(), models.end(), [&](const PartModel& x) { return x.name == name; }))
+      return fail(Status::BadArgument, "--classes: '" + name + "' is listed twice");
+    models.push_back(std::move(*m));
+  }
+  return PartSceneRenderer(std::move(models), o.scene);
 }
 
 Result<PartTemplate> writePartTemplate(const PartSceneRenderer& renderer, const std::string& dirName) {
@@ -43,12 +53,14 @@ Result<DatasetSummary> writeDataset(const DatasetOptions& o) {
   fs::create_directories(o.outDir, ec);
   if (ec) return fail(Status::BadArgument, fmt::format("{}: cannot create the folder: {}", o.outDir, ec.message()));
   const fs::path dir(o.outDir);
-  const PartSceneRenderer renderer = datasetRenderer(o);
+  auto made = datasetRenderer(o);
+  if (!made) return std::unexpected(made.error());
+  const PartSceneRenderer& renderer = *made;
   const PartSceneOptions& s = renderer.options();
 
   if (auto t = writePartTemplate(renderer, o.outDir); !t) return std::unexpected(t.error());
 
-  const config::DatasetFile df{.part = o.part,
+  config::DatasetFile df{.part = o.part,
                                .levels = o.part == "flat" ? 1 : o.levels,
                                .count = o.count,
                                .seed = s.seed,
@@ -66,11 +78,13 @@ Result<DatasetSummary> writeDataset(const DatasetOptions& o) {
                                .fy = renderer.focalPx(),
                                .cx = (s.width - 1) / 2.0,
                                .cy = (s.height - 1) / 2.0,
-                               .cameraHeightMm = s.cameraHeightMm};
+                               .cameraHeightMm = s.cameraHeightMm,
+                               .classes = o.classes};
   if (auto w = config::writeDatasetFile((dir / "dataset.yaml").string(), df); !w) return std::unexpected(w.error());
 
   std::ofstream csv(dir / "truth.csv");
-  csv << "image,x_px,y_px,angle_deg,part,x_mm,y_mm,rz_deg\n";
+  const bool labelled = !o.classes.empty();
+  csv << (labelled ? "image,x_px,y_px,angle_deg,part,x_mm,y_mm,rz_deg,label\n" : "image,x_px,y_px,angle_deg,part,x_mm,y_mm,rz_deg\n");
   DatasetSummary sum;
   cv::Mat img;
   for (int i = 0; i < o.count; ++i) {
@@ -79,12 +93,13 @@ Result<DatasetSummary> writeDataset(const DatasetOptions& o) {
     const std::string name = fmt::format("img_{:05d}.png", i);
     if (!cv::imwrite((dir / name).string(), img)) return fail(Status::Internal, fmt::format("{}/{}: cannot write", o.outDir, name));
     if (scene.parts.empty()) {
-      csv << name << ",,,,-1,,,\n";  // an image without a part: one row, empty truth
+      csv << name << (labelled ? ",,,,-1,,,,\n" : ",,,,-1,,,\n");  // an image without a part: one row, empty truth
       ++sum.emptyImages;
     }
     for (std::size_t k = 0; k < scene.parts.size(); ++k) {
       const auto& p = scene.parts[k];
-      csv << fmt::format("{},{:.4f},{:.4f},{:.4f},{},{:.4f},{:.4f},{:.4f}\n", name, p.uPx, p.vPx, p.angleDeg, k, p.xMm, p.yMm, p.rzDeg);
+      csv << fmt::format("{},{:.4f},{:.4f},{:.4f},{},{:.4f},{:.4f},{:.4f}", name, p.uPx, p.vPx, p.angleDeg, k, p.xMm, p.yMm, p.rzDeg);
+      csv << (labelled ? "," + o.classes.at(static_cast<std::size_t>(p.classIndex)) + "\n" : std::string("\n"));
       ++sum.parts;
     }
     ++sum.images;

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "core/result.hpp"
 #include "sim/part_scene.hpp"
@@ -16,6 +17,9 @@ struct DatasetOptions {
   int count = 100;            // images
   std::string part = "multi";  // "flat" or "multi"
   int levels = 3;             // multi: height levels [2, 4]
+  // Several part classes (PartModel::byName names) mixed in every image, each part's class
+  // in truth.csv's `label` column; empty = `part` alone (the files exactly as without it).
+  std::vector<std::string> classes;
   PartSceneOptions scene;
 };
 
@@ -30,7 +34,7 @@ Result<DatasetSummary> writeDataset(const DatasetOptions& options);
 // grasp height, crop offset, the levels' top faces as paper 000's regions). DIR must exist.
 Result<PartTemplate> writePartTemplate(const PartSceneRenderer& renderer, const std::string& dir);
 
-// The renderer a dataset's options describe (shared with tests).
-PartSceneRenderer datasetRenderer(const DatasetOptions& options);
+// The renderer a dataset's options describe (shared with tests). Errors: an unknown class.
+Result<PartSceneRenderer> datasetRenderer(const DatasetOptions& options);
 
 }  // namespace vgr::sim

@@ -114,6 +114,49 @@ PartModel PartModel::multi(int levels) {
   return m;
 }
 
+namespace {
+
+PartModel plate8(const std::string& name, Polygon outline, std::vector<Polygon> holes = {}) {
+  PartModel m;
+  m.name = name;
+  PartLayer l;
+  l.outline = std::move(outline);
+  l.holes = std::move(holes);
+  l.baseMm = 0;
+  l.topMm = 8;
+  l.gray = 190;
+  m.layers = {l};
+  m.grasp = {0, 0};
+  m.graspHeightMm = 8;
+  m.radiusMm = radiusOf(m);
+  return m;
+}
+
+}  // namespace
+
+const std::vector<std::string>& PartModel::classNames() {
+  static const std::vector<std::string> names = {"flat", "disc", "ring", "hex", "square", "square_small", "rect", "rect_notch"};
+  return names;
+}
+
+Result<PartModel> PartModel::byName(const std::string& name) {
+  if (name == "flat") return flat();
+  if (name == "disc") return plate8(name, circle(0, 0, 40, 96));
+  if (name == "ring") return plate8(name, circle(0, 0, 40, 96), {circle(0, 0, 15, 48)});
+  if (name == "hex") return plate8(name, circle(0, 0, 40, 6));
+  if (name == "square") return plate8(name, rect(-35, -35, 35, 35));
+  if (name == "square_small") return plate8(name, rect(-30, -30, 30, 30));
+  if (name == "rect") return plate8(name, rect(-50, -25, 50, 25));
+  if (name == "rect_notch")
+    return plate8(name, {{-50, -25}, {50, -25}, {50, 25}, {10, 25}, {10, 10}, {-10, 10}, {-10, 25}, {-50, 25}});
+  std::string all;
+  for (const auto& n : classNames()) {
+    if (!all.empty()) all += ", ";
+    all += n;
+  }
+  return fail(Status::BadArgument, "unknown part class '" + name + "' (expected one of " + all + ")");
+}
+
 // ---- renderer -------------------------------------------------------------------------
 
 // A layer's top face drawn in part coordinates at `scale` px/mm over [-half, half]^2 mm:
@@ -148,14 +191,36 @@ PartSceneRenderer::PartSceneRenderer(PartModel part, PartSceneOptions options)
               vision::PinholePlaneModel::downLookingCamera(options.cameraXMm, options.cameraYMm, options.cameraHeightMm,
                                                           options.cameraRzDeg),
               0.0) {
+  sheets_ = makeSheets(part_);
+}
+
+PartSceneRenderer::PartSceneRenderer(std::vector<PartModel> classes, PartSceneOptions options)
+    : PartSceneRenderer(classes.at(0), options) {
+  for (std::size_t c = 1; c < classes.size(); ++c) {
+    Sheets sh = makeSheets(classes[c]);
+    extra_.emplace_back(std::move(classes[c]), std::move(sh));
+  }
+}
+
+const PartModel& PartSceneRenderer::model(int c) const { return c <= 0 ? part_ : extra_.at(c - 1).first; }
+const PartSceneRenderer::Sheets& PartSceneRenderer::sheetsOf(int c) const { return c <= 0 ? sheets_ : extra_.at(c - 1).second; }
+
+std::vector<const PartModel*> PartSceneRenderer::classes() const {
+  std::vector<const PartModel*> out{&part_};
+  for (const auto& e : extra_) out.push_back(&e.first);
+  return out;
+}
+
+PartSceneRenderer::Sheets PartSceneRenderer::makeSheets(const PartModel& part) const {
+  Sheets sheets;
   double top = 0;
-  for (const auto& l : part_.layers) top = std::max(top, l.topMm);
+  for (const auto& l : part.layers) top = std::max(top, l.topMm);
   const double pxPerMm = focal_ / std::max(1.0, options_.cameraHeightMm - top);
-  for (std::size_t k = 0; k < part_.layers.size(); ++k) {
-    const PartLayer& layer = part_.layers[k];
+  for (std::size_t k = 0; k < part.layers.size(); ++k) {
+    const PartLayer& layer = part.layers[k];
     auto sheet = std::make_shared<Sheet>();
     sheet->scale = std::max(4.0, std::ceil(2 * pxPerMm));
-    sheet->half = part_.radiusMm + 4;
+    sheet->half = part.radiusMm + 4;
     const int n = static_cast<int>(std::ceil(2 * sheet->half * sheet->scale));
     // Machined grain: fixed speckle (unique per place, so features are distinctive) plus
     // faint fly-cut arcs, both fixed to the part.
@@ -182,8 +247,9 @@ PartSceneRenderer::PartSceneRenderer(PartModel part, PartSceneOptions options)
     sheet->mask = cv::Mat::zeros(n, n, CV_8UC1);
     cv::fillPoly(sheet->mask, std::vector<std::vector<cv::Point>>{toSheet(layer.outline, sheet->scale, sheet->half)},
                  cv::Scalar(255), cv::LINE_AA, 4);
-    sheets_.push_back(std::move(sheet));
+    sheets.push_back(std::move(sheet));
   }
+  return sheets;
 }
 
 PartSceneRenderer PartSceneRenderer::fromCellConfig(const config::CellConfig& c) {
@@ -206,14 +272,15 @@ PartSceneRenderer PartSceneRenderer::fromCellConfig(const config::CellConfig& c)
   return PartSceneRenderer(c.sim.scene == "multi" ? PartModel::multi(c.sim.levels) : PartModel::flat(), o);
 }
 
-PlacedPart PartSceneRenderer::place(double xMm, double yMm, double rzDeg) const {
+PlacedPart PartSceneRenderer::place(double xMm, double yMm, double rzDeg, int classIndex) const {
   PlacedPart p;
+  p.classIndex = classIndex;
   p.xMm = xMm;
   p.yMm = yMm;
   p.rzDeg = normaliseDeg(rzDeg);
   const double c = std::cos(p.rzDeg * kDegToRad), s = std::sin(p.rzDeg * kDegToRad);
-  const auto& g = part_.grasp;
-  const double h = part_.graspHeightMm;
+  const auto& g = model(classIndex).grasp;
+  const double h = model(classIndex).graspHeightMm;
   const auto px = camera_.project({xMm + c * g.x - s * g.y, yMm + s * g.x + c * g.y, h});
   // The image direction of the part's +x axis at the grasp height, minus the template's
   // (rz = 0 under the optical axis): the rotation as displayed.
@@ -283,14 +350,18 @@ PartScene PartSceneRenderer::sample(std::uint64_t index) const {
   std::vector<cv::Rect2d> taken;
   const cv::Rect2d image(options_.marginPx, options_.marginPx, options_.width - 1 - 2.0 * options_.marginPx,
                          options_.height - 1 - 2.0 * options_.marginPx);
+  // The class of each part from an RNG of its own, so one class samples exactly as before.
+  std::mt19937_64 classRng(options_.seed * 0x94D049BB133111EBull + index * 0x9E3779B97F4A7C15ull + 23);
+  const int classCount = 1 + static_cast<int>(extra_.size());
   for (int k = 0; k < options_.partsPerImage; ++k) {
+    const int cls = classCount > 1 ? static_cast<int>(classRng() % static_cast<std::uint64_t>(classCount)) : 0;
     for (int attempt = 0; attempt < 400; ++attempt) {
       const double u = unit(rng) * (options_.width - 1), v = unit(rng) * (options_.height - 1);
       const double rz = (2 * unit(rng) - 1) * range;
       const auto onPlane = camera_.pixelToPlane({u, v}, 0.0);
       if (!onPlane) continue;
-      const PlacedPart p = place(onPlane->x, onPlane->y, rz);
-      const cv::Rect2d box = footprint(camera_, part_, p);
+      const PlacedPart p = place(onPlane->x, onPlane->y, rz, cls);
+      const cv::Rect2d box = footprint(camera_, model(cls), p);
       if ((box & image) != box) continue;
       const cv::Rect2d grown(box.x - 6, box.y - 6, box.width + 12, box.height + 12);
       if (std::any_of(taken.begin(), taken.end(), [&](const cv::Rect2d& r) { return (r & grown).area() > 0; })) continue;
@@ -303,9 +374,11 @@ PartScene PartSceneRenderer::sample(std::uint64_t index) const {
 }
 
 void PartSceneRenderer::drawPart(const PlacedPart& p, cv::Mat& dst) const {
-  for (std::size_t k = 0; k < part_.layers.size(); ++k) {
-    const PartLayer& layer = part_.layers[k];
-    const Sheet& sheet = *sheets_[k];
+  const PartModel& part = model(p.classIndex);
+  const Sheets& sheets = sheetsOf(p.classIndex);
+  for (std::size_t k = 0; k < part.layers.size(); ++k) {
+    const PartLayer& layer = part.layers[k];
+    const Sheet& sheet = *sheets[k];
     // Walls: each outline edge is a vertical quad from baseMm to topMm; only those facing
     // away from the optical axis stay visible once the top face is drawn over them.
     if (layer.topMm > layer.baseMm) {
@@ -343,7 +416,7 @@ void PartSceneRenderer::drawDecoys(const PartScene& scene, cv::Mat& dst) const {
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   std::vector<cv::Rect2d> taken;
   for (const auto& p : scene.parts) {
-    const cv::Rect2d b = footprint(camera_, part_, p);
+    const cv::Rect2d b = footprint(camera_, model(p.classIndex), p);
     taken.emplace_back(b.x - 6, b.y - 6, b.width + 12, b.height + 12);
   }
   // Source layers drawn in proportion to their top-face area (the base plate most often).
@@ -435,7 +508,7 @@ void PartSceneRenderer::render(const PartScene& scene, cv::Mat& dst) const {
 
   // Clutter: flat distractor shapes on the belt, clear of the parts.
   std::vector<cv::Rect2d> parts;
-  for (const auto& p : scene.parts) parts.push_back(footprint(camera_, part_, p));
+  for (const auto& p : scene.parts) parts.push_back(footprint(camera_, model(p.classIndex), p));
   const double pxPerMm = focal_ / options_.cameraHeightMm;
   for (int k = 0; k < options_.clutter; ++k) {
     for (int attempt = 0; attempt < 50; ++attempt) {

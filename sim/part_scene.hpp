@@ -16,8 +16,10 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "core/result.hpp"
 #include "sim/scene.hpp"  // PointMm
 #include "vision/calib/plane_model.hpp"
 
@@ -56,6 +58,14 @@ struct PartModel {
   // A 130 x 90 mm base plate (8 mm) with `levels` - 1 raised features on it: a rib (20 mm),
   // a round boss (35 mm, grasped at its centre), a square block (50 mm). levels in [2, 4].
   static PartModel multi(int levels);
+  // The part classes `vgr sim render --classes` mixes (docs/classification.md): "flat" (the
+  // part above) and 8 mm thick plates (paper 002's parts were 8 mm thick, Sec. 3) in
+  // pairs of look-alikes that differ in one feature: "disc" (80 mm) / "ring" (the same disc
+  // with a 30 mm hole) / "hex" (80 mm across corners: compactness), "square" (70 mm) /
+  // "square_small" (60 mm: size only), "rect" (100 x 50 mm) / "rect_notch" (the same with a
+  // 20 x 15 mm notch in one long side: solidity). Grasp at the outline's centroid.
+  static Result<PartModel> byName(const std::string& name);
+  static const std::vector<std::string>& classNames();
 };
 
 struct PartSceneOptions {
@@ -86,6 +96,7 @@ struct PlacedPart {
   double xMm = 0, yMm = 0, rzDeg = 0;  // part origin on the plane (base frame), rotation about z
   double uPx = 0, vPx = 0;             // grasp point in the image, px
   double angleDeg = 0;                 // rotation from the template, CCW as displayed, (-180, 180]
+  int classIndex = 0;                  // which of the renderer's part classes (0 = the first)
 };
 
 struct PartScene {
@@ -109,6 +120,10 @@ struct PartTemplate {
 class PartSceneRenderer {
  public:
   PartSceneRenderer(PartModel part, PartSceneOptions options);
+  // Several part classes mixed in one image (each part's class drawn uniformly, from an RNG
+  // of its own: with one class the scenes are exactly those of the constructor above). The
+  // template is the first class's. classes must not be empty.
+  PartSceneRenderer(std::vector<PartModel> classes, PartSceneOptions options);
 
   // The textured scenes of a cell config's simulated camera (`sim.scene: part | multi`):
   // the config's `model` is the true camera (fx = fy assumed; heights and z are
@@ -122,11 +137,13 @@ class PartSceneRenderer {
   void render(const PartScene& scene, cv::Mat& dst) const;
   // Renders the template into dst (CV_8UC1, cropped).
   PartTemplate renderTemplate(cv::Mat& dst) const;
-  // Truth of a part placed at (xMm, yMm, rzDeg).
-  PlacedPart place(double xMm, double yMm, double rzDeg) const;
+  // Truth of a part of class classIndex placed at (xMm, yMm, rzDeg).
+  PlacedPart place(double xMm, double yMm, double rzDeg, int classIndex = 0) const;
 
   const vision::PinholePlaneModel& camera() const { return camera_; }
   const PartModel& part() const { return part_; }
+  // Every class, the first being part().
+  std::vector<const PartModel*> classes() const;
   const PartSceneOptions& options() const { return options_; }
   double focalPx() const { return focal_; }
 
@@ -136,7 +153,13 @@ class PartSceneRenderer {
   // PartSceneOptions::decoys pieces of the part's faces, clear of the scene's parts.
   void drawDecoys(const PartScene& scene, cv::Mat& dst) const;
 
+  using Sheets = std::vector<std::shared_ptr<const Sheet>>;
+  Sheets makeSheets(const PartModel& part) const;
+  const PartModel& model(int classIndex) const;
+  const Sheets& sheetsOf(int classIndex) const;
+
   PartModel part_;
+  std::vector<std::pair<PartModel, Sheets>> extra_;  // classes 1..n-1
   PartSceneOptions options_;
   double focal_;
   vision::PinholePlaneModel camera_;

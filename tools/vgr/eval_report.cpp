@@ -17,6 +17,7 @@
 
 #include "config/dataset_file.hpp"
 #include "config/job.hpp"
+#include "daemon/job_locator.hpp"
 #include "vision/calib/plane_model.hpp"
 #include "vision/locate/locator.hpp"
 
@@ -24,17 +25,6 @@ namespace vgr::tools {
 namespace {
 
 constexpr double kDegToRad = M_PI / 180.0;
-
-struct TruthPart {
-  double u = 0, v = 0, angleDeg = 0;
-  bool hasPose = false;  // x_mm, y_mm, rz_deg columns present (vgr sim render datasets)
-  double xMm = 0, yMm = 0, rzDeg = 0;
-};
-
-struct TruthImage {
-  std::string image;
-  std::vector<TruthPart> parts;  // empty = no part in the image
-};
 
 std::vector<std::string> splitCsv(const std::string& line) {
   std::vector<std::string> out;
@@ -51,51 +41,6 @@ std::vector<std::string> splitCsv(const std::string& line) {
   return out;
 }
 
-Result<std::vector<TruthImage>> readTruth(const std::string& folder) {
-  const std::string path = (std::filesystem::path(folder) / "truth.csv").string();
-  std::ifstream in(path);
-  if (!in) return fail(Status::BadArgument, path + ": cannot open");
-  std::string line;
-  if (!std::getline(in, line)) return fail(Status::BadArgument, path + ":1: empty file, expected the header image,x_px,y_px,angle_deg");
-  const auto header = splitCsv(line);
-  std::map<std::string, std::size_t> col;
-  for (std::size_t i = 0; i < header.size(); ++i) col[header[i]] = i;
-  for (const char* k : {"image", "x_px", "y_px", "angle_deg"})
-    if (!col.count(k)) return fail(Status::BadArgument, fmt::format("{}:1: header lacks the column '{}'", path, k));
-  const bool pose = col.count("x_mm") && col.count("y_mm") && col.count("rz_deg");
-  std::vector<TruthImage> out;
-  std::map<std::string, std::size_t> index;
-  int lineNo = 1;
-  while (std::getline(in, line)) {
-    ++lineNo;
-    if (line.empty() || line == "\r") continue;
-    const auto f = splitCsv(line);
-    if (f.size() < header.size()) return fail(Status::BadArgument, fmt::format("{}:{}: expected {} columns, got {}", path, lineNo, header.size(), f.size()));
-    const std::string& name = f[col["image"]];
-    auto it = index.find(name);
-    if (it == index.end()) {
-      it = index.emplace(name, out.size()).first;
-      out.push_back({name, {}});
-    }
-    if (f[col["x_px"]].empty()) continue;  // an image without a part
-    TruthPart p;
-    try {
-      p.u = std::stod(f[col["x_px"]]);
-      p.v = std::stod(f[col["y_px"]]);
-      p.angleDeg = std::stod(f[col["angle_deg"]]);
-      if (pose && !f[col["x_mm"]].empty()) {
-        p.xMm = std::stod(f[col["x_mm"]]);
-        p.yMm = std::stod(f[col["y_mm"]]);
-        p.rzDeg = std::stod(f[col["rz_deg"]]);
-        p.hasPose = true;
-      }
-    } catch (const std::exception&) {
-      return fail(Status::BadArgument, fmt::format("{}:{}: expected numbers in x_px, y_px, angle_deg", path, lineNo));
-    }
-    out[it->second].parts.push_back(p);
-  }
-  return out;
-}
 
 // What a `vgr sim render` dataset tells about its geometry, for paper 001's rates: the camera
 // (dataset.yaml), the template's crop offset, the heights of the part's levels and the grasp
@@ -160,13 +105,58 @@ double maxOf(const std::vector<double>& v) { return v.empty() ? 0 : *std::max_el
 
 }  // namespace
 
+Result<std::vector<TruthImage>> readTruth(const std::string& folder) {
+  const std::string path = (std::filesystem::path(folder) / "truth.csv").string();
+  std::ifstream in(path);
+  if (!in) return fail(Status::BadArgument, path + ": cannot open");
+  std::string line;
+  if (!std::getline(in, line)) return fail(Status::BadArgument, path + ":1: empty file, expected the header image,x_px,y_px,angle_deg");
+  const auto header = splitCsv(line);
+  std::map<std::string, std::size_t> col;
+  for (std::size_t i = 0; i < header.size(); ++i) col[header[i]] = i;
+  for (const char* k : {"image", "x_px", "y_px", "angle_deg"})
+    if (!col.count(k)) return fail(Status::BadArgument, fmt::format("{}:1: header lacks the column '{}'", path, k));
+  const bool pose = col.count("x_mm") && col.count("y_mm") && col.count("rz_deg");
+  std::vector<TruthImage> out;
+  std::map<std::string, std::size_t> index;
+  int lineNo = 1;
+  while (std::getline(in, line)) {
+    ++lineNo;
+    if (line.empty() || line == "\r") continue;
+    const auto f = splitCsv(line);
+    if (f.size() < header.size()) return fail(Status::BadArgument, fmt::format("{}:{}: expected {} columns, got {}", path, lineNo, header.size(), f.size()));
+    const std::string& name = f[col["image"]];
+    auto it = index.find(name);
+    if (it == index.end()) {
+      it = index.emplace(name, out.size()).first;
+      out.push_back({name, {}});
+    }
+    if (f[col["x_px"]].empty()) continue;  // an image without a part
+    TruthPart p;
+    try {
+      p.u = std::stod(f[col["x_px"]]);
+      p.v = std::stod(f[col["y_px"]]);
+      p.angleDeg = std::stod(f[col["angle_deg"]]);
+      if (col.count("label")) p.label = f[col["label"]];
+      if (pose && !f[col["x_mm"]].empty()) {
+        p.xMm = std::stod(f[col["x_mm"]]);
+        p.yMm = std::stod(f[col["y_mm"]]);
+        p.rzDeg = std::stod(f[col["rz_deg"]]);
+        p.hasPose = true;
+      }
+    } catch (const std::exception&) {
+      return fail(Status::BadArgument, fmt::format("{}:{}: expected numbers in x_px, y_px, angle_deg", path, lineNo));
+    }
+    out[it->second].parts.push_back(p);
+  }
+  return out;
+}
+
 Result<EvalReport> evaluate(const EvalOptions& o) {
   auto job = config::loadJob(o.jobFolder);
   if (!job) return std::unexpected(job.error());
   const std::string method = o.method.empty() ? job->method : o.method;
-  const cv::Mat templ = cv::imread(job->templatePath(), cv::IMREAD_GRAYSCALE);
-  if (templ.empty()) return fail(Status::BadArgument, job->templatePath() + ": cannot read the template image");
-  auto locator = vision::makeLocator(method, templ, job->taught);
+  auto locator = daemon::makeJobLocator(*job, method);
   if (!locator) return std::unexpected(locator.error());
   auto truth = readTruth(o.datasetFolder);
   if (!truth) return std::unexpected(truth.error());

@@ -39,6 +39,20 @@ struct EvalReport {
 
 Result<EvalReport> evaluate(const EvalOptions& options);
 
+// truth.csv of a dataset (docs/datasets.md), grouped by image in file order.
+struct TruthPart {
+  double u = 0, v = 0, angleDeg = 0;
+  bool hasPose = false;  // x_mm, y_mm, rz_deg columns present (vgr sim render datasets)
+  double xMm = 0, yMm = 0, rzDeg = 0;
+  std::string label;     // the `label` column (a class name), empty when absent
+};
+struct TruthImage {
+  std::string image;
+  std::vector<TruthPart> parts;  // empty = no part in the image
+};
+// Errors name the file and line.
+Result<std::vector<TruthImage>> readTruth(const std::string& folder);
+
 // One JSON object (no newline) with the keys of docs/localization.md: n, success_rate, pos_err_px_mean,
 // pos_err_px_max, ang_err_deg_mean, ang_err_deg_max, time_ms_median, and the rest.
 std::string evalJson(const EvalReport& report, const EvalOptions& options);

@@ -15,6 +15,7 @@
 #include "core/status.hpp"
 #include "core/pose.hpp"
 #include "daemon/cell_mapping.hpp"
+#include "daemon/job_locator.hpp"
 #include "vision/calib/pixel_mapping.hpp"
 #include "vision/locate/locator.hpp"
 #include "vision/part_poses.hpp"
@@ -25,8 +26,6 @@ int runLocate(const LocateOptions& o) {
   auto job = config::loadJob(o.job);
   if (!job) return badInput(job.error().message);
   const std::string method = o.method.empty() ? job->method : o.method;
-  const cv::Mat templ = cv::imread(job->templatePath(), cv::IMREAD_GRAYSCALE);
-  if (templ.empty()) return badInput(job->templatePath() + ": cannot read the template image");
   const cv::Mat img = cv::imread(o.image, cv::IMREAD_GRAYSCALE);
   if (img.empty()) return badInput(o.image + ": cannot read the image");
   // With a calibration (a cell config), pixels map to the robot frame exactly as vgrd maps
@@ -44,7 +43,7 @@ int runLocate(const LocateOptions& o) {
                                   size->height, o.image, img.cols, img.rows));
     rules.heightMm = job->partHeightMm;
   }
-  auto locator = vision::makeLocator(method, templ, job->taught);
+  auto locator = daemon::makeJobLocator(*job, method);
   if (!locator) return badInput(locator.error().message);
   const auto t0 = std::chrono::steady_clock::now();
   auto out = (*locator)->locate(img);
@@ -68,6 +67,10 @@ int runLocate(const LocateOptions& o) {
     p["y_px"] = d.v;
     p["angle_deg"] = d.angleDeg;
     p["score"] = d.score;
+    if (!job->classify.model.empty()) {  // a classifying job (docs/classification.md): 0 = unknown
+      p["label"] = d.label;
+      p["confidence"] = d.confidence;
+    }
     if (mapping) {
       const auto parts = vision::partPoses({d}, *mapping, rules);
       if (!parts.empty()) {
@@ -84,8 +87,11 @@ int runLocate(const LocateOptions& o) {
     std::printf("%s\n", j.dump().c_str());
   } else {
     std::printf("%s: %zu part(s) in %.1f ms (%s)\n", o.image.c_str(), out->parts.size(), ms, method.c_str());
-    for (const auto& d : out->parts)
-      std::printf("  x %.2f px  y %.2f px  angle %.2f deg  score %.3f\n", d.u, d.v, d.angleDeg, d.score);
+    for (const auto& d : out->parts) {
+      std::printf("  x %.2f px  y %.2f px  angle %.2f deg  score %.3f", d.u, d.v, d.angleDeg, d.score);
+      if (!job->classify.model.empty()) std::printf("  label %d (confidence %.3f)", d.label, d.confidence);
+      std::printf("\n");
+    }
   }
   return 0;
 }

@@ -5,6 +5,7 @@
 //   vgr grab --camera ID ...  trigger N frames, report errors and latency (docs/cameras.md)
 //   vgr calibrate intrinsics|handeye|plane|synth ...   calibration (docs/calibration.md)
 //   vgr sim render | teach | locate | eval   localization datasets, jobs, runs (docs/localization.md)
+//   vgr classify train | eval   paper 002's part classifier (docs/classification.md)
 #include <map>
 #include <memory>
 #include <string>
@@ -19,6 +20,7 @@
 #include "tools/vgr/calibrate_intrinsics.hpp"
 #include "tools/vgr/calibrate_plane.hpp"
 #include "tools/vgr/calibrate_synth.hpp"
+#include "tools/vgr/classify.hpp"
 #include "tools/vgr/cameras.hpp"
 #include "tools/vgr/check.hpp"
 #include "tools/vgr/demo.hpp"
@@ -41,6 +43,7 @@ struct Group {
 constexpr Group kGroups[] = {
     {"calibrate", "camera intrinsics, hand-eye, synthetic calibration data"},
     {"sim", "simulation tools"},
+    {"classify", "part classifier of paper 002: train, eval (docs/classification.md)"},
 };
 
 struct Entry {
@@ -70,6 +73,8 @@ int main(int argc, char** argv) {
       {nullptr, std::make_unique<tools::TeachCommand>()},
       {nullptr, std::make_unique<tools::LocateCommand>()},
       {nullptr, std::make_unique<tools::EvalCommand>()},
+      {"classify", std::make_unique<tools::ClassifyTrainCommand>()},
+      {"classify", std::make_unique<tools::ClassifyEvalCommand>()},
   };
 
   std::map<std::string, CLI::App*> groups;  // added when their first member is

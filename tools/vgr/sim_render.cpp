@@ -21,6 +21,10 @@ CLI::App* SimRenderCommand::add(CLI::App& parent) {
   renderCmd->add_option("--count", d.count, "images")->check(CLI::Range(1, 1000000));
   renderCmd->add_option("--seed", d.scene.seed, "scene seed");
   renderCmd->add_option("--part", d.part, "flat or multi")->check(CLI::IsMember({"flat", "multi"}));
+  renderCmd->add_option("--classes", d.classes,
+                        "part classes mixed in every image, comma-separated (flat, disc, ring, hex, square, square_small, "
+                        "rect, rect_notch); truth.csv gains a label column (docs/datasets.md)")
+      ->delimiter(',');
   renderCmd->add_option("--levels", d.levels, "height levels of the multi part")->check(CLI::Range(2, 4));
   renderCmd->add_option("--angle-range", d.scene.angleRangeDeg, "rotation drawn in [-DEG, DEG] (180 = full turn)")->check(CLI::Range(0.0, 180.0));
   renderCmd->add_option("--noise", d.scene.noiseSigma, "Gaussian noise sigma, gray levels")->check(CLI::Range(0.0, 64.0));

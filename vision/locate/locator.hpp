@@ -36,7 +36,9 @@ struct Detection {
   double angleDeg = 0;    // rotation from the template, CCW as displayed, (-180, 180]
   double score = 0;       // [0, 1], method specific, comparable against minScore
   double areaPx = 0;      // px², 0 when the method does not measure it
-  int label = 0;          // which part type / template (0 = the job's one template)
+  int label = 0;          // which part type / template (0 = the job's one template, or "unknown"
+                          // when the job has a classifier: vision/classify/classifying_locator.hpp)
+  double confidence = 0;  // [0, 1]: the classifier's confidence in `label`; 0 without a classifier
 };
 
 // One accepted feature correspondence (feature methods only), for paper 001's match
