@@ -149,6 +149,7 @@ JobFile parse(const YAML::Node& root, const std::string& file, const std::string
   const YAML::Node params = top.get("params");
   if (params && !params.IsNull()) {
     if (!params.IsMap()) top.fail(params, "params", "expected a mapping of parameter: value");
+    failOnDuplicateKeys(file, params, "params");
     for (const auto& kv : params) {
       const std::string name = kv.first.as<std::string>();
       if (!kv.second.IsScalar()) top.fail(kv.second, "params." + name, "expected a single value");

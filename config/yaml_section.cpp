@@ -1,6 +1,7 @@
 #include "config/yaml_section.hpp"
 
 #include <fstream>
+#include <map>
 #include <utility>
 
 #include <fmt/core.h>
@@ -12,6 +13,23 @@ namespace vgr::config {
 Section::Section(std::string file, YAML::Node node, std::string path)
     : file_(std::move(file)), node_(std::move(node)), path_(std::move(path)) {
   if (node_ && !node_.IsNull() && !node_.IsMap()) fail(node_, "", "expected a mapping");
+  if (node_ && node_.IsMap()) failOnDuplicateKeys(file_, node_, path_);
+}
+
+void failOnDuplicateKeys(const std::string& file, const YAML::Node& map, const std::string& path) {
+  // yaml-cpp keeps every entry of a mapping and node[key] answers the first: a key written
+  // twice would silently lose its second value.
+  std::map<std::string, int> seen;  // key -> 1-based line of its first entry
+  for (const auto& kv : map) {
+    if (!kv.first.IsScalar()) continue;
+    const std::string k = kv.first.Scalar();
+    const int line = kv.first.Mark().line >= 0 ? kv.first.Mark().line + 1 : 0;
+    const auto [at, fresh] = seen.emplace(k, line);
+    if (!fresh) {
+      const std::string full = path.empty() ? k : path + "." + k;
+      throw SectionError{fmt::format("{}:{}: key '{}': duplicate key (first given on line {})", file, line, full, at->second)};
+    }
+  }
 }
 
 void Section::fail(const YAML::Node& at, const std::string& key, const std::string& what) const {

@@ -5,12 +5,10 @@
 
 #include <fmt/core.h>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 
-#include "config/job.hpp"
 #include "core/log.hpp"
 #include "daemon/cell_mapping.hpp"
-#include "vision/locate/moments_locator.hpp"
+#include "daemon/job_locator.hpp"
 
 namespace vgr::daemon {
 
@@ -20,8 +18,9 @@ using std::chrono::milliseconds;
 namespace {
 
 constexpr double kDegToRad = std::numbers::pi / 180.0;
-// Time kept back from the cycle deadline for localization and publishing (ms).
-constexpr int kProcessingReserveMs = 150;
+// Time kept back from the cycle deadline for localization and publishing (ms); the config
+// refuses deadlines that leave the camera less than config::kMinCameraTimeMs.
+constexpr int kProcessingReserveMs = config::kProcessingReserveMs;
 
 double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
 
@@ -68,22 +67,9 @@ Result<void> CycleRunner::prepareJobs() {
     prepared.rules.angleOffsetDeg = job.angleOffsetDeg;
     prepared.rules.reference =
         poseFromXyzRz(job.reference.x, job.reference.y, job.reference.z, job.reference.rzDeg * kDegToRad);
-    if (job.folder.empty()) {
-      // Untaught: the blob-moments method with the job's keys in the cell config.
-      vision::MomentsParams params;
-      params.threshold = job.threshold;
-      params.minAreaPx = job.minAreaPx;
-      params.maxAreaPx = job.maxAreaPx;
-      prepared.locator = vision::makeUntaughtMomentsLocator(params);
-    } else {
-      auto jf = config::loadJob(job.folder);
-      if (!jf) return std::unexpected(jf.error());
-      const cv::Mat templ = cv::imread(jf->templatePath(), cv::IMREAD_GRAYSCALE);
-      if (templ.empty()) return fail(Status::BadArgument, jf->templatePath() + ": cannot read the template image");
-      auto loc = vision::makeLocator(job.method, templ, jf->taught);
-      if (!loc) return fail(loc.error().code, fmt::format("job {} ({}): {}", job.id, job.folder, loc.error().message));
-      prepared.locator = std::move(*loc);
-    }
+    auto loc = makeJobLocator(job);
+    if (!loc) return std::unexpected(loc.error());
+    prepared.locator = std::move(*loc);
     // The first locate() sizes the method's buffers (the shape matcher: ~1 s at 2448x2048):
     // pay it now, not in the first cycle's deadline.
     const auto warmStart = Clock::now();
