@@ -9,6 +9,7 @@
 #include "core/log.hpp"
 #include "daemon/cell_mapping.hpp"
 #include "daemon/job_locator.hpp"
+#include "vision/gray_image.hpp"
 
 namespace vgr::daemon {
 
@@ -175,10 +176,11 @@ CycleResult CycleRunner::runCycle(const Trigger& t) {
   const auto locateStart = Clock::now();
   cv::Mat image(frame_.height, frame_.width, CV_8UC1, frame_.data.data());
   if (frame_.pixel == drivers::PixelType::Mono16) {
-    // The locator works on 8-bit gray: keep the top 8 of the camera's significant bits.
+    // The locator works on 8-bit gray: keep the top 8 of the camera's significant bits, the
+    // one conversion the offline tools use too (vision/gray_image.hpp).
     thread_local cv::Mat gray8;  // cycle thread; reused between cycles
     const cv::Mat wide(frame_.height, frame_.width, CV_16UC1, frame_.data.data());
-    wide.convertTo(gray8, CV_8UC1, 1.0 / (1 << (frame_.bitDepth - 8)));
+    vision::toGray8(wide, frame_.bitDepth, gray8);
     image = gray8;
   }
   auto found = job->second.locator->locate(image);

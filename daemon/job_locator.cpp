@@ -2,9 +2,9 @@
 
 #include <fmt/core.h>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "config/job.hpp"
+#include "vision/gray_image.hpp"
 #include "vision/locate/moments_locator.hpp"
 
 namespace vgr::daemon {
@@ -20,7 +20,7 @@ Result<std::unique_ptr<vision::Locator>> makeJobLocator(const config::JobConfig&
   }
   auto jf = config::loadJob(job.folder);
   if (!jf) return std::unexpected(jf.error());
-  const cv::Mat templ = cv::imread(jf->templatePath(), cv::IMREAD_GRAYSCALE);
+  const cv::Mat templ = vision::readGray8(jf->templatePath()).value_or(cv::Mat());
   if (templ.empty()) return fail(Status::BadArgument, jf->templatePath() + ": cannot read the template image");
   auto loc = vision::makeLocator(job.method, templ, jf->taught);
   if (!loc) return fail(loc.error().code, fmt::format("job {} ({}): {}", job.id, job.folder, loc.error().message));

@@ -9,13 +9,13 @@
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "core/pose.hpp"
 #include "vision/calib/handeye.hpp"
 #include "vision/calib/intrinsics.hpp"
 #include "vision/calib/robot_pose_file.hpp"
 #include "vision/calib/se3.hpp"
+#include "vision/gray_image.hpp"
 
 namespace vgr::tools {
 namespace calib = vision::calib;
@@ -51,7 +51,7 @@ int runCalibrateHandEye(const CalibHandEyeOptions& o) {
   for (std::size_t i = 0; i < poses->size(); ++i) {
     const auto& p = (*poses)[i];
     const std::string file = (fs::path(o.folder) / p.image).string();
-    const cv::Mat img = cv::imread(file, cv::IMREAD_GRAYSCALE);
+    const cv::Mat img = vision::readGray8(file).value_or(cv::Mat());
     if (img.empty()) return bad(fmt::format("{}:{}: image '{}' cannot be read", posePath, p.line, p.image));
     if (img.size() != cam->imageSize)
       return bad(fmt::format("{}: {}x{} px, the intrinsics are for {}x{} px", file, img.cols, img.rows,

@@ -10,9 +10,9 @@
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "vision/calib/intrinsics.hpp"
+#include "vision/gray_image.hpp"
 
 namespace vgr::tools {
 namespace calib = vision::calib;
@@ -43,7 +43,7 @@ int runCalibrateIntrinsics(const CalibIntrinsicsOptions& o) {
   cv::Size size;
   for (std::size_t i = 0; i < files.size(); ++i) {
     const std::string name = fs::path(files[i]).filename().string();
-    const cv::Mat img = cv::imread(files[i], cv::IMREAD_GRAYSCALE);
+    const cv::Mat img = vision::readGray8(files[i]).value_or(cv::Mat());
     if (img.empty()) return bad(fmt::format("{}: cannot read the image", files[i]));
     if (size.width == 0) size = img.size();
     if (img.size() != size)

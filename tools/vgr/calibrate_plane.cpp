@@ -9,13 +9,13 @@
 #include <fmt/core.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/calib3d.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "core/pose.hpp"
 #include "vision/calib/handeye.hpp"
 #include "vision/calib/intrinsics.hpp"
 #include "vision/calib/mapping.hpp"
 #include "vision/calib/se3.hpp"
+#include "vision/gray_image.hpp"
 
 namespace vgr::tools {
 namespace calib = vision::calib;
@@ -67,7 +67,7 @@ int runCalibratePlane(const CalibPlaneOptions& o) {
     if (!he) return bad(he.error().message);
     if (he->config != calib::HandEyeConfig::EyeToHand)
       return bad(fmt::format("{}: an eye-in-hand calibration needs the snapshot pose; use --points", o.handeye));
-    const cv::Mat img = cv::imread(o.image, cv::IMREAD_GRAYSCALE);
+    const cv::Mat img = vision::readGray8(o.image).value_or(cv::Mat());
     if (img.empty()) return bad(fmt::format("{}: cannot read the image", o.image));
     const auto d = calib::detectPattern(img, *spec, o.image);
     if (!d.found)

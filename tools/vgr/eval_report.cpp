@@ -18,6 +18,7 @@
 #include "config/dataset_file.hpp"
 #include "config/job.hpp"
 #include "vision/calib/plane_model.hpp"
+#include "vision/gray_image.hpp"
 #include "vision/locate/locator.hpp"
 
 namespace vgr::tools {
@@ -164,7 +165,7 @@ Result<EvalReport> evaluate(const EvalOptions& o) {
   auto job = config::loadJob(o.jobFolder);
   if (!job) return std::unexpected(job.error());
   const std::string method = o.method.empty() ? job->method : o.method;
-  const cv::Mat templ = cv::imread(job->templatePath(), cv::IMREAD_GRAYSCALE);
+  const cv::Mat templ = vision::readGray8(job->templatePath()).value_or(cv::Mat());
   if (templ.empty()) return fail(Status::BadArgument, job->templatePath() + ": cannot read the template image");
   auto locator = vision::makeLocator(method, templ, job->taught);
   if (!locator) return std::unexpected(locator.error());
@@ -183,7 +184,7 @@ Result<EvalReport> evaluate(const EvalOptions& o) {
   for (std::size_t i = 0; i < count; ++i) {
     const TruthImage& ti = (*truth)[i];
     const std::string path = (std::filesystem::path(o.datasetFolder) / ti.image).string();
-    const cv::Mat img = cv::imread(path, cv::IMREAD_GRAYSCALE);
+    const cv::Mat img = vision::readGray8(path).value_or(cv::Mat());
     if (img.empty()) {
       // Reported (EvalReport::unreadable) and left out; the rest are evaluated.
       rep.unreadable.push_back(path + ": cannot read the image");
