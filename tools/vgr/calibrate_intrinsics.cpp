@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "vision/calib/intrinsics.hpp"
+#include "vision/calib/mapping.hpp"
 #include "vision/gray_image.hpp"
 
 namespace vgr::tools {
@@ -29,6 +30,7 @@ std::string joinNames(const std::vector<std::string>& names) {
 }  // namespace
 
 int runCalibrateIntrinsics(const CalibIntrinsicsOptions& o) {
+  if (auto w = checkOutputPath(o.out); !w) return bad(w.error().message);
   auto spec = patternSpec(o.pattern);
   if (!spec) return bad(spec.error().message);
   glob_t g{};
@@ -98,6 +100,10 @@ int runCalibrateIntrinsics(const CalibIntrinsicsOptions& o) {
                     : "");
   else
     std::printf("tangential distortion held at 0 (--no-tangential)\n");
+  if (const calib::CellCalibrationLimits limits; c.rmsPx > limits.maxReprojPx)
+    return implausible("intrinsics", fmt::format("the plate reprojects at {:.2f} px RMS (vgrd's limit {} px)", c.rmsPx, limits.maxReprojPx),
+                       "Hint: check --cols/--rows (inner corners), --pattern, that every image shows the same plate, and "
+                       "leave out blurred views");
   if (auto w = calib::writeIntrinsics(o.out, c); !w) return bad(w.error().message);
   std::printf("written: %s\n", o.out.c_str());
   if (o.json) {

@@ -35,6 +35,7 @@ std::vector<cv::Point3f> viewObjectPoints(const calib::PatternSpec& spec, const 
 }  // namespace
 
 int runCalibratePlane(const CalibPlaneOptions& o) {
+  if (auto w = checkOutputPath(o.out); !w) return bad(w.error().message);
   calib::WorkPlane plane;
   std::string source;
   if (!o.points.empty() == !o.image.empty()) return bad("give either --image (a plate on the conveyor) or --points FILE");
