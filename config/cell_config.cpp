@@ -380,6 +380,7 @@ const JobConfig* CellConfig::findJob(int id) const {
 
 Result<CellConfig> parseCellConfig(const std::string& text, const std::string& sourceName) {
   try {
+    failOnInvalidUtf8(sourceName, text);
     return parse(YAML::Load(text), sourceName);
   } catch (const SectionError& e) {
     return fail(Status::BadArgument, e.message);

@@ -196,6 +196,7 @@ std::string JobFile::calibrationPath() const {
 
 Result<JobFile> parseJob(const std::string& text, const std::string& sourceName, const std::string& folder) {
   try {
+    failOnInvalidUtf8(sourceName, text);
     return parse(YAML::Load(text), sourceName, folder);
   } catch (const SectionError& e) {
     return fail(Status::BadArgument, e.message);

@@ -1,5 +1,6 @@
 #include "config/yaml_section.hpp"
 
+#include <cstdint>
 #include <fstream>
 #include <map>
 #include <utility>
@@ -14,6 +15,33 @@ Section::Section(std::string file, YAML::Node node, std::string path)
     : file_(std::move(file)), node_(std::move(node)), path_(std::move(path)) {
   if (node_ && !node_.IsNull() && !node_.IsMap()) fail(node_, "", "expected a mapping");
   if (node_ && node_.IsMap()) failOnDuplicateKeys(file_, node_, path_);
+}
+
+void failOnInvalidUtf8(const std::string& file, const std::string& text) {
+  int line = 1;
+  std::size_t lineStart = 0;
+  for (std::size_t i = 0; i < text.size();) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    if (c == '\n') {
+      ++line;
+      lineStart = ++i;
+      continue;
+    }
+    int extra = c < 0x80 ? 0 : (c >> 5) == 0x6 ? 1 : (c >> 4) == 0xE ? 2 : (c >> 3) == 0x1E ? 3 : -1;
+    bool ok = extra >= 0 && i + extra < text.size();
+    for (int k = 1; ok && k <= extra; ++k) ok = (static_cast<unsigned char>(text[i + k]) >> 6) == 0x2;
+    // Overlong forms, surrogates and code points above U+10FFFF are not UTF-8 either.
+    if (ok && extra > 0) {
+      std::uint32_t cp = c & (0x3F >> extra);
+      for (int k = 1; k <= extra; ++k) cp = (cp << 6) | (static_cast<unsigned char>(text[i + k]) & 0x3F);
+      static const std::uint32_t kMin[4] = {0, 0x80, 0x800, 0x10000};
+      ok = cp >= kMin[extra] && cp <= 0x10FFFF && (cp < 0xD800 || cp > 0xDFFF);
+    }
+    if (!ok)
+      throw SectionError{fmt::format("{}:{}: not UTF-8 text: byte 0x{:02X} at column {} (save the file as UTF-8)", file, line,
+                                     c, i - lineStart + 1)};
+    i += static_cast<std::size_t>(extra) + 1;
+  }
 }
 
 void failOnDuplicateKeys(const std::string& file, const YAML::Node& map, const std::string& path) {

@@ -29,6 +29,11 @@ struct SectionError {
 // Section checks its mapping; call it for a mapping read without one (e.g. `params`).
 void failOnDuplicateKeys(const std::string& file, const YAML::Node& map, const std::string& path);
 
+// Throws "FILE:LINE: not UTF-8 text: byte 0xE9 at column C (save the file as UTF-8)" for
+// the first byte sequence in `text` that is not valid UTF-8 (yaml-cpp would pass it on
+// silently, a Latin-1 name reaching the robot or the journal as garbage).
+void failOnInvalidUtf8(const std::string& file, const std::string& text);
+
 class Section {
  public:
   // node: the mapping (absent or null = empty, a key given twice = an error); path: its key

@@ -4,6 +4,7 @@
 // an unwritable journal, a bind host that does not resolve) exits 1, naming the file.
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -146,6 +147,31 @@ TEST_F(cell_check, ACellCalibratedWithFilesNeedsNoModel) {
   cfg = vgr::config::parseCellConfig(yaml, (dir_ / "cell.yaml").string());
   ASSERT_FALSE(cfg.has_value());
   EXPECT_NE(cfg.error().message.find("key 'model': required"), std::string::npos) << cfg.error().message;
+}
+
+}  // namespace
+
+namespace {
+
+TEST(cell_check_text, NonUtf8BytesAreAnErrorNamingTheLine) {
+  std::string yaml = vgr::config::embeddedSimCellYaml();
+  const auto at = yaml.find("  name: sim-cell");
+  ASSERT_NE(at, std::string::npos);
+  yaml.replace(at, 16, "  name: sim-c\xe9ll");  // Latin-1 e-acute
+  const int line = 1 + static_cast<int>(std::count(yaml.begin(), yaml.begin() + static_cast<long>(at), '\n'));
+  auto cfg = vgr::config::parseCellConfig(yaml, "CELL.yaml");
+  ASSERT_FALSE(cfg.has_value()) << "a Latin-1 byte was read as " << cfg->name;
+  EXPECT_NE(cfg.error().message.find(fmt::format("CELL.yaml:{}: ", line)), std::string::npos) << cfg.error().message;
+  EXPECT_NE(cfg.error().message.find("UTF-8"), std::string::npos) << cfg.error().message;
+
+  vgr::config::JobFile j;
+  j.folder = "JOB";
+  j.name = "caf\xe9";
+  j.grasps = {{1, 1}};
+  std::string text = vgr::config::jobYaml(j);
+  auto job = vgr::config::parseJob(text, "JOB/job.yaml", "JOB");
+  ASSERT_FALSE(job.has_value());
+  EXPECT_NE(job.error().message.find("UTF-8"), std::string::npos) << job.error().message;
 }
 
 }  // namespace
