@@ -18,6 +18,9 @@ execute_process(COMMAND ${CMAKE_COMMAND} -DSRC=${PROJECT_SOURCE_DIR} -DOUT=${VGR
 add_library(vgr_version STATIC ${VGR_VERSION_CPP})
 target_include_directories(vgr_version PRIVATE ${PROJECT_SOURCE_DIR})
 add_dependencies(vgr_version vgr_version_gen)
-# After vgr::daemon_lib on the link line (daemon/plant.cpp calls buildVersion()).
+# vgr_daemon's plant.cpp calls buildVersion(): everything that links the daemon library (vgrd,
+# vgr through vgr_tools, the tests) gets it after it on the link line. A new version relinks
+# those, it recompiles nothing.
+target_link_libraries(vgr_daemon INTERFACE vgr_version)
 target_link_libraries(vgrd PRIVATE vgr_version)
 target_link_libraries(vgr PRIVATE vgr_version)

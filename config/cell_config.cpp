@@ -11,6 +11,7 @@
 #include <set>
 #include <sstream>
 
+#include <fmt/core.h>
 #include <yaml-cpp/yaml.h>
 
 #include "config/job.hpp"
@@ -95,9 +96,21 @@ void parseModel(Section s, PlaneModelConfig& m) {
   s.finish();
 }
 
+// The Modbus server binds and the client connects to a numeric IPv4 address (no resolver):
+// a host name is refused here, not at start.
+void readIpv4(Section& s, const std::string& key, std::string& out, const char* role) {
+  s.read<std::string>(key, out);
+  in_addr a{};
+  if (::inet_pton(AF_INET, out.c_str(), &a) != 1)
+    s.fail(s.get(key), key,
+           fmt::format("expected a numeric IPv4 address ({}; 127.0.0.1 for this machine only, 0.0.0.0 for every "
+                       "interface), got '{}'",
+                       role, out));
+}
+
 void parseModbus(Section s, ModbusConfig& m) {
   s.read<bool>("enabled", m.enabled);
-  s.read<std::string>("bind", m.bind);
+  readIpv4(s, "bind", m.bind, "the Modbus server binds IPv4 addresses, it resolves no names");
   int port = m.port;
   s.read<int>("port", port, inRange(1, 65535), "[1, 65535]");
   m.port = static_cast<std::uint16_t>(port);
@@ -124,7 +137,7 @@ void parseModbus(Section s, ModbusConfig& m) {
   Section c(s.file(), s.get("client"), s.join("client"));
   ModbusClientConfig& mc = m.client;
   c.read<bool>("enabled", mc.enabled);
-  c.read<std::string>("host", mc.host);
+  readIpv4(c, "host", mc.host, "the PLC's address; names are not resolved");
   int clientPort = mc.port;
   c.read<int>("port", clientPort, inRange(1, 65535), "[1, 65535]");
   mc.port = static_cast<std::uint16_t>(clientPort);
@@ -355,12 +368,16 @@ CellConfig parse(const YAML::Node& root, const std::string& file) {
   cell.read<std::string>("log_level", c.logLevel,
                          oneOf({"trace", "debug", "info", "warn", "error", "critical", "off"}),
                          "one of: trace, debug, info, warn, error, critical, off");
-  cell.read<int>("cycle_deadline_ms", c.cycleDeadlineMs, inRange(100, 60000), "[100, 60000]");
+  cell.read<int>("cycle_deadline_ms", c.cycleDeadlineMs, inRange(kMinCycleDeadlineMs, 60000),
+                 fmt::format("[{}, 60000] ({} ms of it are kept for processing, the camera needs at least {} ms)",
+                             kMinCycleDeadlineMs, kProcessingReserveMs, kMinCameraTimeMs));
   cell.finish();
 
   top.require("camera");
   parseCamera(Section(file, top.get("camera"), "camera"), c.camera);
-  top.require("model");
+  // The pinhole `model` maps pixels when there are no calibration files; with them it is
+  // optional (vgrd, vgr locate and vgr eval map with the files: daemon/cell_mapping.hpp).
+  if (!root["calibration"] || root["calibration"].IsNull()) top.require("model");
   parseModel(Section(file, top.get("model"), "model"), c.model);
   parseModbus(Section(file, top.get("modbus"), "modbus"), c.modbus);
 
@@ -424,6 +441,7 @@ const JobConfig* CellConfig::findJob(int id) const {
 
 Result<CellConfig> parseCellConfig(const std::string& text, const std::string& sourceName) {
   try {
+    failOnInvalidUtf8(sourceName, text);
     return parse(YAML::Load(text), sourceName);
   } catch (const SectionError& e) {
     return fail(Status::BadArgument, e.message);

@@ -206,15 +206,21 @@ struct MqttConfig {
   int reconnectMinS = 1;           // s, [1, 3600]: first back-off, doubling up to reconnect_max_s
   int reconnectMaxS = 30;          // s, [reconnect_min_s, 3600]
 };
+// Of every cycle's deadline, the cycle runner keeps kProcessingReserveMs for locating and
+// publishing and gives the camera the rest; a deadline must leave the camera at least
+// kMinCameraTimeMs.
+inline constexpr int kProcessingReserveMs = 150;  // ms
+inline constexpr int kMinCameraTimeMs = 100;      // ms
+inline constexpr int kMinCycleDeadlineMs = kProcessingReserveMs + kMinCameraTimeMs;
 
 struct CellConfig {
   std::string sourcePath;           // file it was loaded from
   std::string name = "cell";
   std::string journalPath = "/var/lib/vgr/journal.jsonl";
   std::string logLevel = "info";
-  int cycleDeadlineMs = 1500;       // ms, [100, 60000]: trigger -> result, always answered
+  int cycleDeadlineMs = 1500;       // ms, [kMinCycleDeadlineMs = 250, 60000]: trigger -> result, always answered
   CameraConfig camera;
-  PlaneModelConfig model;
+  PlaneModelConfig model;           // required unless the `calibration` section is present
   ModbusConfig modbus;
   std::vector<RobotConfig> robots;
   std::vector<JobConfig> jobs;

@@ -1,7 +1,11 @@
 #include "config/job.hpp"
 
+#include <algorithm>
+#include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
 
 #include <fmt/core.h>
@@ -11,6 +15,51 @@
 
 namespace vgr::config {
 namespace {
+
+struct ImageSize {
+  int width = 0, height = 0;
+};
+
+std::uint32_t bigEndian(const unsigned char* p, int n) {
+  std::uint32_t v = 0;
+  for (int i = 0; i < n; ++i) v = (v << 8) | p[i];
+  return v;
+}
+
+// The size of a PNG, JPEG or BMP image from its header (config links no image codec);
+// nothing for any other file.
+std::optional<ImageSize> imageHeaderSize(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return std::nullopt;
+  unsigned char h[32] = {};
+  in.read(reinterpret_cast<char*>(h), sizeof h);
+  const auto got = in.gcount();
+  static const unsigned char kPng[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (got >= 24 && std::equal(kPng, kPng + 8, h) && std::string(reinterpret_cast<char*>(h + 12), 4) == "IHDR")
+    return ImageSize{static_cast<int>(bigEndian(h + 16, 4)), static_cast<int>(bigEndian(h + 20, 4))};
+  if (got >= 26 && h[0] == 'B' && h[1] == 'M') {
+    const auto le = [&](int at) { return static_cast<std::int32_t>(h[at] | h[at + 1] << 8 | h[at + 2] << 16 | static_cast<std::uint32_t>(h[at + 3]) << 24); };
+    return ImageSize{std::abs(le(18)), std::abs(le(22))};
+  }
+  if (got >= 4 && h[0] == 0xFF && h[1] == 0xD8) {
+    // JPEG: walk the markers to the first start-of-frame (SOF0..SOF15 except DHT, JPG, DAC).
+    in.clear();
+    in.seekg(2);
+    unsigned char m[9];
+    while (in.read(reinterpret_cast<char*>(m), 4)) {
+      if (m[0] != 0xFF) break;
+      const int marker = m[1];
+      const int length = static_cast<int>(bigEndian(m + 2, 2));
+      if (marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC) {
+        if (!in.read(reinterpret_cast<char*>(m), 5)) break;
+        return ImageSize{static_cast<int>(bigEndian(m + 3, 2)), static_cast<int>(bigEndian(m + 1, 2))};
+      }
+      if (length < 2) break;
+      in.seekg(length - 2, std::ios::cur);
+    }
+  }
+  return std::nullopt;
+}
 
 std::vector<TemplateRegion> parseRegions(Section& top, const YAML::Node& list) {
   std::vector<TemplateRegion> out;
@@ -35,6 +84,13 @@ std::vector<TemplateRegion> parseRegions(Section& top, const YAML::Node& list) {
   return out;
 }
 
+// A grasp point must lie on the template: [0, size - 1] px (pixel centres at integers), the
+// bound `vgr teach` checks.
+void checkOnTemplate(const Section& s, const YAML::Node& at, const std::string& key, double v, int size, const ImageSize& t) {
+  if (v < 0 || v > size - 1)
+    s.fail(at, key, fmt::format("{} is outside the {}x{} px template (expected [0, {}])", v, t.width, t.height, size - 1));
+}
+
 JobFile parse(const YAML::Node& root, const std::string& file, const std::string& folder) {
   Section top(file, root, "");
   if (!root || root.IsNull()) top.fail(root, "", "the file is empty");
@@ -47,6 +103,12 @@ JobFile parse(const YAML::Node& root, const std::string& file, const std::string
   if (j.method.empty()) top.fail(top.get("method"), "method", "must not be empty");
   j.templateImage = top.text("template", j.templateImage);
 
+  // The template's size, for the fields given in template px, from the image's header. A
+  // missing template or one that is no PNG, JPEG or BMP is left to the reader that decodes it
+  // (each fails naming it: the cell config, vgrd's start, vgr locate and eval).
+  std::optional<ImageSize> templ;
+  if (!folder.empty()) templ = imageHeaderSize((std::filesystem::path(folder) / j.templateImage).string());
+
   const YAML::Node grasps = top.get("grasps");
   if (!grasps || !grasps.IsSequence() || grasps.size() == 0)
     top.fail(grasps ? grasps : root, "grasps", "expected a non-empty list of {x_px, y_px}");
@@ -54,6 +116,10 @@ JobFile parse(const YAML::Node& root, const std::string& file, const std::string
     Section g(file, grasps[i], fmt::format("grasps[{}]", i));
     if (!g.has("x_px") || !g.has("y_px")) g.fail(grasps[i], "", "expected {x_px, y_px}");
     j.grasps.push_back({g.number("x_px", 0, -1e6, 1e6), g.number("y_px", 0, -1e6, 1e6)});
+    if (templ) {
+      checkOnTemplate(g, g.get("x_px"), "x_px", j.grasps.back().u, templ->width, *templ);
+      checkOnTemplate(g, g.get("y_px"), "y_px", j.grasps.back().v, templ->height, *templ);
+    }
     g.finish(Section::UnknownKeys::Plain);
   }
   j.taught.grasp = j.grasps.front();
@@ -94,6 +160,7 @@ JobFile parse(const YAML::Node& root, const std::string& file, const std::string
   const YAML::Node params = top.get("params");
   if (params && !params.IsNull()) {
     if (!params.IsMap()) top.fail(params, "params", "expected a mapping of parameter: value");
+    failOnDuplicateKeys(file, params, "params");
     for (const auto& kv : params) {
       const std::string name = kv.first.as<std::string>();
       if (!kv.second.IsScalar()) top.fail(kv.second, "params." + name, "expected a single value");
@@ -102,6 +169,21 @@ JobFile parse(const YAML::Node& root, const std::string& file, const std::string
     }
   }
   j.taught.regions = parseRegions(top, top.get("regions"));
+  if (templ) {
+    // A region is a mask clipped to the template: vertices may lie outside, but a region
+    // wholly outside selects no contour and is a mistake (e.g. polygons of another template).
+    const YAML::Node regions = top.get("regions");
+    for (std::size_t i = 0; i < j.taught.regions.size(); ++i) {
+      double x0 = 1e18, y0 = 1e18, x1 = -1e18, y1 = -1e18;
+      for (const auto& p : j.taught.regions[i].polygon) {
+        x0 = std::min(x0, p.u), x1 = std::max(x1, p.u), y0 = std::min(y0, p.v), y1 = std::max(y1, p.v);
+      }
+      if (x1 < -0.5 || y1 < -0.5 || x0 > templ->width - 0.5 || y0 > templ->height - 0.5)
+        top.fail(regions[i]["polygon"], fmt::format("regions[{}].polygon", i),
+                 fmt::format("lies wholly outside the {}x{} px template ([{}, {}] x [{}, {}] px)", templ->width, templ->height,
+                             x0, x1, y0, y1));
+    }
+  }
   top.finish(Section::UnknownKeys::Plain);
   return j;
 }
@@ -128,6 +210,7 @@ std::string JobFile::classifierPath() const {
 
 Result<JobFile> parseJob(const std::string& text, const std::string& sourceName, const std::string& folder) {
   try {
+    failOnInvalidUtf8(sourceName, text);
     return parse(YAML::Load(text), sourceName, folder);
   } catch (const SectionError& e) {
     return fail(Status::BadArgument, e.message);

@@ -50,7 +50,10 @@ struct JobFile {
   std::string calibrationPath() const;  // empty when calibration is empty
 };
 
-// Reads FOLDER/job.yaml. Errors: Status::BadArgument, "FILE:LINE: key 'k': what".
+// Reads FOLDER/job.yaml. Errors: Status::BadArgument, "FILE:LINE: key 'k': what". Fields in
+// template px are checked against the template's size read from its header (PNG, JPEG,
+// BMP): a grasp point off the template, a region wholly outside it. This is the one loader
+// vgrd's cell config, `vgr locate`, `vgr eval` and `vgr check` go through.
 Result<JobFile> loadJob(const std::string& folder);
 Result<JobFile> parseJob(const std::string& yamlText, const std::string& sourceName, const std::string& folder);
 

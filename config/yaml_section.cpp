@@ -1,6 +1,8 @@
 #include "config/yaml_section.hpp"
 
+#include <cstdint>
 #include <fstream>
+#include <map>
 #include <utility>
 
 #include <fmt/core.h>
@@ -12,6 +14,50 @@ namespace vgr::config {
 Section::Section(std::string file, YAML::Node node, std::string path)
     : file_(std::move(file)), node_(std::move(node)), path_(std::move(path)) {
   if (node_ && !node_.IsNull() && !node_.IsMap()) fail(node_, "", "expected a mapping");
+  if (node_ && node_.IsMap()) failOnDuplicateKeys(file_, node_, path_);
+}
+
+void failOnInvalidUtf8(const std::string& file, const std::string& text) {
+  int line = 1;
+  std::size_t lineStart = 0;
+  for (std::size_t i = 0; i < text.size();) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    if (c == '\n') {
+      ++line;
+      lineStart = ++i;
+      continue;
+    }
+    int extra = c < 0x80 ? 0 : (c >> 5) == 0x6 ? 1 : (c >> 4) == 0xE ? 2 : (c >> 3) == 0x1E ? 3 : -1;
+    bool ok = extra >= 0 && i + extra < text.size();
+    for (int k = 1; ok && k <= extra; ++k) ok = (static_cast<unsigned char>(text[i + k]) >> 6) == 0x2;
+    // Overlong forms, surrogates and code points above U+10FFFF are not UTF-8 either.
+    if (ok && extra > 0) {
+      std::uint32_t cp = c & (0x3F >> extra);
+      for (int k = 1; k <= extra; ++k) cp = (cp << 6) | (static_cast<unsigned char>(text[i + k]) & 0x3F);
+      static const std::uint32_t kMin[4] = {0, 0x80, 0x800, 0x10000};
+      ok = cp >= kMin[extra] && cp <= 0x10FFFF && (cp < 0xD800 || cp > 0xDFFF);
+    }
+    if (!ok)
+      throw SectionError{fmt::format("{}:{}: not UTF-8 text: byte 0x{:02X} at column {} (save the file as UTF-8)", file, line,
+                                     c, i - lineStart + 1)};
+    i += static_cast<std::size_t>(extra) + 1;
+  }
+}
+
+void failOnDuplicateKeys(const std::string& file, const YAML::Node& map, const std::string& path) {
+  // yaml-cpp keeps every entry of a mapping and node[key] answers the first: a key written
+  // twice would silently lose its second value.
+  std::map<std::string, int> seen;  // key -> 1-based line of its first entry
+  for (const auto& kv : map) {
+    if (!kv.first.IsScalar()) continue;
+    const std::string k = kv.first.Scalar();
+    const int line = kv.first.Mark().line >= 0 ? kv.first.Mark().line + 1 : 0;
+    const auto [at, fresh] = seen.emplace(k, line);
+    if (!fresh) {
+      const std::string full = path.empty() ? k : path + "." + k;
+      throw SectionError{fmt::format("{}:{}: key '{}': duplicate key (first given on line {})", file, line, full, at->second)};
+    }
+  }
 }
 
 void Section::fail(const YAML::Node& at, const std::string& key, const std::string& what) const {

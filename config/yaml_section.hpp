@@ -24,9 +24,20 @@ struct SectionError {
   std::string message;
 };
 
+// Throws "FILE:LINE: key 'PATH.KEY': duplicate key (first given on line N)" when `map` holds
+// a key twice (yaml-cpp would answer the first value and drop the second silently). Every
+// Section checks its mapping; call it for a mapping read without one (e.g. `params`).
+void failOnDuplicateKeys(const std::string& file, const YAML::Node& map, const std::string& path);
+
+// Throws "FILE:LINE: not UTF-8 text: byte 0xE9 at column C (save the file as UTF-8)" for
+// the first byte sequence in `text` that is not valid UTF-8 (yaml-cpp would pass it on
+// silently, a Latin-1 name reaching the robot or the journal as garbage).
+void failOnInvalidUtf8(const std::string& file, const std::string& text);
+
 class Section {
  public:
-  // node: the mapping (absent or null = empty); path: its key path ("" at the top).
+  // node: the mapping (absent or null = empty, a key given twice = an error); path: its key
+  // path ("" at the top).
   Section(std::string file, YAML::Node node, std::string path);
 
   [[noreturn]] void fail(const YAML::Node& at, const std::string& key, const std::string& what) const;

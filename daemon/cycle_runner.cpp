@@ -5,13 +5,11 @@
 
 #include <fmt/core.h>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 
-#include "config/job.hpp"
 #include "core/log.hpp"
 #include "daemon/cell_mapping.hpp"
 #include "daemon/job_locator.hpp"
-#include "vision/locate/moments_locator.hpp"
+#include "vision/gray_image.hpp"
 
 namespace vgr::daemon {
 
@@ -21,8 +19,9 @@ using std::chrono::milliseconds;
 namespace {
 
 constexpr double kDegToRad = std::numbers::pi / 180.0;
-// Time kept back from the cycle deadline for localization and publishing (ms).
-constexpr int kProcessingReserveMs = 150;
+// Time kept back from the cycle deadline for localization and publishing (ms); the config
+// refuses deadlines that leave the camera less than config::kMinCameraTimeMs.
+constexpr int kProcessingReserveMs = config::kProcessingReserveMs;
 
 double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
 
@@ -69,20 +68,9 @@ Result<void> CycleRunner::prepareJobs() {
     prepared.rules.angleOffsetDeg = job.angleOffsetDeg;
     prepared.rules.reference =
         poseFromXyzRz(job.reference.x, job.reference.y, job.reference.z, job.reference.rzDeg * kDegToRad);
-    if (job.folder.empty()) {
-      // Untaught: the blob-moments method with the job's keys in the cell config.
-      vision::MomentsParams params;
-      params.threshold = job.threshold;
-      params.minAreaPx = job.minAreaPx;
-      params.maxAreaPx = job.maxAreaPx;
-      prepared.locator = vision::makeUntaughtMomentsLocator(params);
-    } else {
-      auto jf = config::loadJob(job.folder);
-      if (!jf) return std::unexpected(jf.error());
-      auto loc = makeJobLocator(*jf, job.method);  // + the job's classifier (paper 002), if any
-      if (!loc) return fail(loc.error().code, fmt::format("job {} ({}): {}", job.id, job.folder, loc.error().message));
-      prepared.locator = std::move(*loc);
-    }
+    auto loc = makeJobLocator(job);
+    if (!loc) return std::unexpected(loc.error());
+    prepared.locator = std::move(*loc);
     // The first locate() sizes the method's buffers (the shape matcher: ~1 s at 2448x2048):
     // pay it now, not in the first cycle's deadline.
     const auto warmStart = Clock::now();
@@ -195,10 +183,11 @@ CycleResult CycleRunner::runCycle(const Trigger& t) {
   const auto locateStart = Clock::now();
   cv::Mat image(frame_.height, frame_.width, CV_8UC1, frame_.data.data());
   if (frame_.pixel == drivers::PixelType::Mono16) {
-    // The locator works on 8-bit gray: keep the top 8 of the camera's significant bits.
+    // The locator works on 8-bit gray: keep the top 8 of the camera's significant bits, the
+    // one conversion the offline tools use too (vision/gray_image.hpp).
     thread_local cv::Mat gray8;  // cycle thread; reused between cycles
     const cv::Mat wide(frame_.height, frame_.width, CV_16UC1, frame_.data.data());
-    wide.convertTo(gray8, CV_8UC1, 1.0 / (1 << (frame_.bitDepth - 8)));
+    vision::toGray8(wide, frame_.bitDepth, gray8);
     image = gray8;
   }
   auto found = job->second.locator->locate(image);

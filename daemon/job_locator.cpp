@@ -2,15 +2,18 @@
 
 #include <string>
 
-#include <opencv2/imgcodecs.hpp>
+#include <fmt/core.h>
+#include <opencv2/core.hpp>
 
 #include "vision/classify/classifying_locator.hpp"
 #include "vision/classify/part_classifier.hpp"
+#include "vision/gray_image.hpp"
+#include "vision/locate/moments_locator.hpp"
 
 namespace vgr::daemon {
 
 Result<std::unique_ptr<vision::Locator>> makeJobLocator(const config::JobFile& job, std::string_view method) {
-  const cv::Mat templ = cv::imread(job.templatePath(), cv::IMREAD_GRAYSCALE);
+  const cv::Mat templ = vision::readGray8(job.templatePath()).value_or(cv::Mat());
   if (templ.empty()) return fail(Status::BadArgument, job.templatePath() + ": cannot read the template image");
   auto locator = vision::makeLocator(method.empty() ? std::string_view(job.method) : method, templ, job.taught);
   if (!locator || job.classify.model.empty()) return locator;
@@ -22,6 +25,22 @@ Result<std::unique_ptr<vision::Locator>> makeJobLocator(const config::JobFile& j
   params.threshold = job.classify.threshold;
   params.keepUnknown = job.classify.keepUnknown;
   return vision::classify::makeClassifyingLocator(std::move(*locator), std::move(*classifier), params);
+}
+
+Result<std::unique_ptr<vision::Locator>> makeJobLocator(const config::JobConfig& job) {
+  if (job.folder.empty()) {
+    // Untaught: the blob-moments method with the job's keys in the cell config.
+    vision::MomentsParams params;
+    params.threshold = job.threshold;
+    params.minAreaPx = job.minAreaPx;
+    params.maxAreaPx = job.maxAreaPx;
+    return vision::makeUntaughtMomentsLocator(params);
+  }
+  auto jf = config::loadJob(job.folder);
+  if (!jf) return std::unexpected(jf.error());
+  auto loc = makeJobLocator(*jf, job.method);
+  if (!loc) return fail(loc.error().code, fmt::format("job {} ({}): {}", job.id, job.folder, loc.error().message));
+  return std::move(*loc);
 }
 
 }  // namespace vgr::daemon

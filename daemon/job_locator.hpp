@@ -1,21 +1,30 @@
-// The Locator a job folder describes, built the one way vgrd (CycleRunner::prepareJobs),
-// `vgr locate` and `vgr eval` build it: the template image read from the job, the method
-// (job.yaml `method`, or an override) built by vision::makeLocator, and, when job.yaml has a
-// `classify:` section, wrapped in the part classifier (vision/classify/classifying_locator.hpp,
-// paper 002) so every detection carries a label and its confidence.
-// Start-up code, one thread. Errors: Status::BadArgument, naming the file at fault.
+// The Locator a job describes, built the one way vgrd (CycleRunner::prepareJobs),
+// `vgrd --check` / `vgr check` (daemon/check.hpp), `vgr locate` and `vgr eval` build it:
+//   - a job folder: the template image read from the job (vision::readGray8), the method
+//     (job.yaml `method`, or an override) built by vision::makeLocator, and, when job.yaml
+//     has a `classify:` section, wrapped in the part classifier
+//     (vision/classify/classifying_locator.hpp, paper 002) so every detection carries a
+//     label and its confidence;
+//   - a cell job without a folder: the blob-moments locator with its cell-config keys.
+// Start-up code, any one thread; reads the job folder's files.
 #pragma once
 
 #include <memory>
 #include <string_view>
 
+#include "config/cell_config.hpp"
 #include "config/job.hpp"
 #include "core/result.hpp"
 #include "vision/locate/locator.hpp"
 
 namespace vgr::daemon {
 
-// method empty = the job's own method.
+// method empty = the job's own method. Errors: Status::BadArgument, naming the file at fault.
 Result<std::unique_ptr<vision::Locator>> makeJobLocator(const config::JobFile& job, std::string_view method = {});
+
+// A cell config's job. Errors name the job and its folder: "job 1 (FOLDER): hu: unknown
+// parameter 'x' (FILE:LINE: ...)", "FOLDER/template.png: cannot read the template image", or
+// the job.yaml loader's line.
+Result<std::unique_ptr<vision::Locator>> makeJobLocator(const config::JobConfig& job);
 
 }  // namespace vgr::daemon

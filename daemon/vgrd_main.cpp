@@ -1,6 +1,8 @@
 // vgrd: the vision-guided robotics daemon (run by systemd, Type=notify).
 //   vgrd --config /etc/vgr/cell.yaml            run the cell
-//   vgrd --config FILE --check                  validate the config and exit (non-zero on error)
+//   vgrd --config FILE --check                  validate the config and all it names, exit
+//                                               (0 valid, 2 config file error, 1 a job, calibration
+//                                               file, journal or bind host vgrd cannot use: daemon/check.hpp)
 #include <cstdio>
 #include <string>
 
@@ -20,21 +22,32 @@ int main(int argc, char** argv) {
   std::string logLevel;
   bool check = false;
   app.add_option("--config", configPath, "cell config (YAML)");
-  app.add_flag("--check", check, "validate the config and exit: 0 when valid, 2 with one line naming file:line and key when not");
+  app.add_flag("--check", check,
+               "validate the config and everything it names (job folders and their methods, calibration files, journal, "
+               "bind hosts) and exit: 0 when valid; 2 for the config file itself (one line naming file:line and key); 1 "
+               "when it names something vgrd cannot use");
   app.add_option("--journal", journalPath, "override cell.journal (the per-cycle JSON-lines journal)");
   app.add_option("--log-level", logLevel, "override cell.log_level");
   CLI11_PARSE(app, argc, argv);
 
-  auto checked = vgr::daemon::checkCellConfig(configPath);
-  if (!checked) {
-    std::fprintf(stderr, "vgrd: %s\n", checked.error().message.c_str());
-    return 2;
-  }
   if (check) {
+    auto checked = vgr::daemon::checkCellConfig(configPath);
+    if (!checked) {
+      std::fprintf(stderr, "vgrd: %s\n", checked.error().message.c_str());
+      return checked.error().exitCode;
+    }
     std::printf("%s: ok (%s)\n", configPath.c_str(), checked->summary.c_str());
     return 0;
   }
-  vgr::config::CellConfig& cfg = checked->config;
+  // The start loads the config alone: what it names (job folders' methods, calibration
+  // files, journal, bind addresses) fails where the start uses it (exit 1), and a missing
+  // calibration leaves vgrd running and answering -6 NOT_CALIBRATED.
+  auto loaded = vgr::config::loadCellConfig(configPath);
+  if (!loaded) {
+    std::fprintf(stderr, "vgrd: %s\n", loaded.error().message.c_str());
+    return 2;
+  }
+  vgr::config::CellConfig& cfg = *loaded;
   if (!journalPath.empty()) cfg.journalPath = journalPath;
   vgr::log::Level level = vgr::log::Level::Info;
   if (!vgr::log::parseLevel(logLevel.empty() ? cfg.logLevel : logLevel, level)) {

@@ -1,9 +1,13 @@
 #include "tools/vgr/calibrate_common.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 
 #include <CLI/CLI.hpp>
+#include <fmt/core.h>
 
 namespace vgr::tools {
 namespace calib = vision::calib;
@@ -37,6 +41,25 @@ void progress(std::size_t i, std::size_t n, const std::string& name, const std::
 int bad(const std::string& msg) {
   std::fprintf(stderr, "vgr calibrate: %s\n", msg.c_str());
   return 2;
+}
+
+Result<void> checkOutputPath(const std::string& path, const std::string& option) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (path.empty()) return fail(Status::BadArgument, option + ": expected a file path");
+  if (fs::is_directory(path, ec)) return fail(Status::BadArgument, fmt::format("{} {}: is a folder, expected a file", option, path));
+  fs::path dir = fs::path(path).parent_path();
+  if (dir.empty()) dir = ".";
+  if (!fs::is_directory(dir, ec))
+    return fail(Status::BadArgument, fmt::format("{} {}: the folder {} does not exist", option, path, dir.string()));
+  if (::access(dir.c_str(), W_OK | X_OK) != 0 || (fs::exists(path, ec) && ::access(path.c_str(), W_OK) != 0))
+    return fail(Status::BadArgument, fmt::format("{} {}: not writable", option, path));
+  return {};
+}
+
+int implausible(const std::string& what, const std::string& why, const std::string& hint) {
+  std::fprintf(stderr, "vgr calibrate: implausible %s: %s; nothing written. %s\n", what.c_str(), why.c_str(), hint.c_str());
+  return 1;
 }
 
 }  // namespace vgr::tools

@@ -35,4 +35,13 @@ void progress(std::size_t i, std::size_t n, const std::string& name, const std::
 // "vgr calibrate: <msg>" on stderr; returns 2 (bad input).
 int bad(const std::string& msg);
 
+// Checked before any image is read: `path` (an --out file) can be written: its folder
+// exists and is writable, and it is no folder itself. Creates nothing.
+Result<void> checkOutputPath(const std::string& path, const std::string& option = "--out");
+
+// "vgr calibrate: implausible <what>: <why>. <hint>" on stderr, no file written; returns 1
+// (the data were read, the result is not one vgrd would load: vision/calib/mapping.hpp
+// CellCalibrationLimits).
+int implausible(const std::string& what, const std::string& why, const std::string& hint);
+
 }  // namespace vgr::tools

@@ -9,13 +9,14 @@
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "core/pose.hpp"
 #include "vision/calib/handeye.hpp"
 #include "vision/calib/intrinsics.hpp"
+#include "vision/calib/mapping.hpp"
 #include "vision/calib/robot_pose_file.hpp"
 #include "vision/calib/se3.hpp"
+#include "vision/gray_image.hpp"
 
 namespace vgr::tools {
 namespace calib = vision::calib;
@@ -23,6 +24,7 @@ namespace se3 = vision::se3;
 namespace fs = std::filesystem;
 
 int runCalibrateHandEye(const CalibHandEyeOptions& o) {
+  if (auto w = checkOutputPath(o.out); !w) return bad(w.error().message);
   auto spec = patternSpec(o.pattern);
   if (!spec) return bad(spec.error().message);
   auto cam = calib::readIntrinsics(o.intrinsics);
@@ -51,7 +53,7 @@ int runCalibrateHandEye(const CalibHandEyeOptions& o) {
   for (std::size_t i = 0; i < poses->size(); ++i) {
     const auto& p = (*poses)[i];
     const std::string file = (fs::path(o.folder) / p.image).string();
-    const cv::Mat img = cv::imread(file, cv::IMREAD_GRAYSCALE);
+    const cv::Mat img = vision::readGray8(file).value_or(cv::Mat());
     if (img.empty()) return bad(fmt::format("{}:{}: image '{}' cannot be read", posePath, p.line, p.image));
     if (img.size() != cam->imageSize)
       return bad(fmt::format("{}: {}x{} px, the intrinsics are for {}x{} px", file, img.cols, img.rows,
@@ -111,6 +113,19 @@ int runCalibrateHandEye(const CalibHandEyeOptions& o) {
     if (truth) methods.back()["err_x_mm"] = emm, methods.back()["err_x_deg"] = edeg;
   }
   std::printf("chosen: %s\n", r->reason.c_str());
+  {
+    // The limits vgrd loads a hand-eye file with: a result beyond them would only make every
+    // cycle answer NOT_CALIBRATED.
+    const calib::CellCalibrationLimits limits;
+    const auto& b = r->bestResult();
+    if (b.reprojRmsPx > limits.maxReprojPx || b.transResidMm > limits.maxHandEyeMm || b.rotResidDeg > limits.maxHandEyeDeg)
+      return implausible("hand-eye result",
+                         fmt::format("{} reprojects the plate at {:.2f} px RMS (limit {} px) and the views disagree by "
+                                     "{:.2f} mm / {:.3f} deg RMS (limits {} mm / {} deg)",
+                                     b.method, b.reprojRmsPx, limits.maxReprojPx, b.transResidMm, b.rotResidDeg,
+                                     limits.maxHandEyeMm, limits.maxHandEyeDeg),
+                         "Hint: check --square (the printed square's size in mm, measured on the plate), --cols/--rows (inner corners), --intrinsics (the same camera at the same resolution) and the poses' units and --pose-format");
+  }
   if (auto w = calib::writeHandEye(o.out, *r); !w) return bad(w.error().message);
   std::printf("written: %s\n", o.out.c_str());
   if (o.json) {

@@ -10,9 +10,10 @@
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "vision/calib/intrinsics.hpp"
+#include "vision/calib/mapping.hpp"
+#include "vision/gray_image.hpp"
 
 namespace vgr::tools {
 namespace calib = vision::calib;
@@ -29,6 +30,7 @@ std::string joinNames(const std::vector<std::string>& names) {
 }  // namespace
 
 int runCalibrateIntrinsics(const CalibIntrinsicsOptions& o) {
+  if (auto w = checkOutputPath(o.out); !w) return bad(w.error().message);
   auto spec = patternSpec(o.pattern);
   if (!spec) return bad(spec.error().message);
   glob_t g{};
@@ -43,7 +45,7 @@ int runCalibrateIntrinsics(const CalibIntrinsicsOptions& o) {
   cv::Size size;
   for (std::size_t i = 0; i < files.size(); ++i) {
     const std::string name = fs::path(files[i]).filename().string();
-    const cv::Mat img = cv::imread(files[i], cv::IMREAD_GRAYSCALE);
+    const cv::Mat img = vision::readGray8(files[i]).value_or(cv::Mat());
     if (img.empty()) return bad(fmt::format("{}: cannot read the image", files[i]));
     if (size.width == 0) size = img.size();
     if (img.size() != size)
@@ -98,6 +100,10 @@ int runCalibrateIntrinsics(const CalibIntrinsicsOptions& o) {
                     : "");
   else
     std::printf("tangential distortion held at 0 (--no-tangential)\n");
+  if (const calib::CellCalibrationLimits limits; c.rmsPx > limits.maxReprojPx)
+    return implausible("intrinsics", fmt::format("the plate reprojects at {:.2f} px RMS (vgrd's limit {} px)", c.rmsPx, limits.maxReprojPx),
+                       "Hint: check --cols/--rows (inner corners), --pattern, that every image shows the same plate, and "
+                       "leave out blurred views");
   if (auto w = calib::writeIntrinsics(o.out, c); !w) return bad(w.error().message);
   std::printf("written: %s\n", o.out.c_str());
   if (o.json) {

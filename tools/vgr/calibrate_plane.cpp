@@ -9,13 +9,13 @@
 #include <fmt/core.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/calib3d.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "core/pose.hpp"
 #include "vision/calib/handeye.hpp"
 #include "vision/calib/intrinsics.hpp"
 #include "vision/calib/mapping.hpp"
 #include "vision/calib/se3.hpp"
+#include "vision/gray_image.hpp"
 
 namespace vgr::tools {
 namespace calib = vision::calib;
@@ -35,6 +35,7 @@ std::vector<cv::Point3f> viewObjectPoints(const calib::PatternSpec& spec, const 
 }  // namespace
 
 int runCalibratePlane(const CalibPlaneOptions& o) {
+  if (auto w = checkOutputPath(o.out); !w) return bad(w.error().message);
   calib::WorkPlane plane;
   std::string source;
   if (!o.points.empty() == !o.image.empty()) return bad("give either --image (a plate on the conveyor) or --points FILE");
@@ -67,7 +68,7 @@ int runCalibratePlane(const CalibPlaneOptions& o) {
     if (!he) return bad(he.error().message);
     if (he->config != calib::HandEyeConfig::EyeToHand)
       return bad(fmt::format("{}: an eye-in-hand calibration needs the snapshot pose; use --points", o.handeye));
-    const cv::Mat img = cv::imread(o.image, cv::IMREAD_GRAYSCALE);
+    const cv::Mat img = vision::readGray8(o.image).value_or(cv::Mat());
     if (img.empty()) return bad(fmt::format("{}: cannot read the image", o.image));
     const auto d = calib::detectPattern(img, *spec, o.image);
     if (!d.found)

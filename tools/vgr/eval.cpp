@@ -10,6 +10,7 @@ int runEval(const EvalCliOptions& options) {
   const EvalOptions& o = options.scoring;
   auto rep = evaluate(o);
   if (!rep) return badInput(rep.error().message);
+  for (const auto& u : rep->unreadable) std::fprintf(stderr, "vgr eval: left out: %s\n", u.c_str());
   if (!o.plotPath.empty())
     if (auto p = plotErrors(*rep, o, o.plotPath); !p) return badInput(p.error().message);
   if (!options.json) {
@@ -28,6 +29,10 @@ CLI::App* EvalCommand::add(CLI::App& parent) {
   evalCmd->add_option("--dataset", e.datasetFolder, "dataset folder (truth.csv)")->required();
   evalCmd->add_option("--method", e.method, "override the job's method");
   evalCmd->add_option("--pos-tol", e.posTolPx, "success: position error <= PX")->check(CLI::Range(0.0, 1e6));
+  evalCmd->add_option("--pair-tol", e.pairTolPx,
+                      "a detection farther than PX from every truth part is a false positive and the part missed "
+                      "(default: --pos-tol)")
+      ->check(CLI::Range(0.0, 1e6));
   evalCmd->add_option("--ang-tol", e.angTolDeg, "success: angle error <= DEG")->check(CLI::Range(0.0, 180.0));
   evalCmd->add_option("--match-tol", e.matchTolPx, "a feature match is correct within PX of its true place")->check(CLI::Range(0.0, 1e6));
   evalCmd->add_option("--limit", e.limit, "first N images only")->check(CLI::Range(0, 100000000));

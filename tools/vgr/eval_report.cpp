@@ -19,6 +19,7 @@
 #include "config/job.hpp"
 #include "daemon/job_locator.hpp"
 #include "vision/calib/plane_model.hpp"
+#include "vision/gray_image.hpp"
 #include "vision/locate/locator.hpp"
 
 namespace vgr::tools {
@@ -160,6 +161,10 @@ Result<EvalReport> evaluate(const EvalOptions& o) {
   if (!locator) return std::unexpected(locator.error());
   auto truth = readTruth(o.datasetFolder);
   if (!truth) return std::unexpected(truth.error());
+  if (truth->empty())
+    return fail(Status::BadArgument, (std::filesystem::path(o.datasetFolder) / "truth.csv").string() +
+                                         ": no images listed: nothing to evaluate");
+  const double pairTol = o.pairTolPx > 0 ? o.pairTolPx : o.posTolPx;
   const DatasetGeometry geo = readGeometry(o.datasetFolder);
 
   EvalReport rep;
@@ -169,27 +174,34 @@ Result<EvalReport> evaluate(const EvalOptions& o) {
   for (std::size_t i = 0; i < count; ++i) {
     const TruthImage& ti = (*truth)[i];
     const std::string path = (std::filesystem::path(o.datasetFolder) / ti.image).string();
-    const cv::Mat img = cv::imread(path, cv::IMREAD_GRAYSCALE);
-    if (img.empty()) return fail(Status::BadArgument, path + ": cannot read the image");
+    const cv::Mat img = vision::readGray8(path).value_or(cv::Mat());
+    if (img.empty()) {
+      // Reported (EvalReport::unreadable) and left out; the rest are evaluated.
+      rep.unreadable.push_back(path + ": cannot read the image");
+      continue;
+    }
     const auto t0 = std::chrono::steady_clock::now();
     auto out = (*locator)->locate(img);
     rep.timeMs.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
     if (!out) return fail(out.error().code, fmt::format("{}: {}", path, out.error().message));
     const auto& dets = out->parts;
     ++rep.images;
-    if (dets.size() == ti.parts.size()) ++rep.countCorrectImages;
     if (ti.parts.empty()) {
       ++rep.emptyImages;
       ++rep.n;
-      if (dets.empty()) ++rep.successes;
+      if (dets.empty()) ++rep.successes, ++rep.countCorrectImages;
       rep.falsePositives += static_cast<int>(dets.size());
       continue;
     }
-    // Truth parts and detections paired by nearest grasp point, closest pairs first.
+    // Truth parts and detections paired by nearest grasp point, closest pairs first, and
+    // only within the pairing tolerance: a detection farther from every truth part is a
+    // false positive, and the part it did not find is missed.
     std::vector<std::tuple<double, std::size_t, std::size_t>> pairs;
     for (std::size_t a = 0; a < ti.parts.size(); ++a)
-      for (std::size_t b = 0; b < dets.size(); ++b)
-        pairs.emplace_back(std::hypot(ti.parts[a].u - dets[b].u, ti.parts[a].v - dets[b].v), a, b);
+      for (std::size_t b = 0; b < dets.size(); ++b) {
+        const double d = std::hypot(ti.parts[a].u - dets[b].u, ti.parts[a].v - dets[b].v);
+        if (d <= pairTol) pairs.emplace_back(d, a, b);
+      }
     std::sort(pairs.begin(), pairs.end());
     std::vector<int> truthTo(ti.parts.size(), -1), detTo(dets.size(), -1);
     for (const auto& [d, a, b] : pairs) {
@@ -197,7 +209,10 @@ Result<EvalReport> evaluate(const EvalOptions& o) {
       truthTo[a] = static_cast<int>(b);
       detTo[b] = static_cast<int>(a);
     }
-    rep.falsePositives += static_cast<int>(std::count(detTo.begin(), detTo.end(), -1));
+    const int unpaired = static_cast<int>(std::count(detTo.begin(), detTo.end(), -1));
+    rep.falsePositives += unpaired;
+    // The count is correct when every part was found and nothing else was.
+    if (unpaired == 0 && std::count(truthTo.begin(), truthTo.end(), -1) == 0) ++rep.countCorrectImages;
     for (std::size_t a = 0; a < ti.parts.size(); ++a) {
       ++rep.n;
       ++rep.parts;
@@ -225,6 +240,9 @@ Result<EvalReport> evaluate(const EvalOptions& o) {
         }
     }
   }
+  if (rep.images == 0)
+    return fail(Status::BadArgument, fmt::format("{}: none of the {} image(s) could be read, e.g. {}", o.datasetFolder,
+                                                 rep.unreadable.size(), rep.unreadable.front()));
   if (geo.camera && graspN > 0) rep.graspTpRate = double(graspTp) / graspN;
   return rep;
 }
@@ -255,6 +273,8 @@ std::string evalJson(const EvalReport& r, const EvalOptions& o) {
     j["match_tp_rate"] = nullptr;  // not a feature method
   }
   if (r.graspTpRate) j["grasp_tp_rate"] = *r.graspTpRate;
+  j["pair_tol_px"] = o.pairTolPx > 0 ? o.pairTolPx : o.posTolPx;
+  j["unreadable"] = r.unreadable;
   return j.dump();
 }
 

@@ -20,6 +20,7 @@
 #include "drivers/aravis_camera.hpp"
 #include "drivers/camera.hpp"
 #include "drivers/camera_worker.hpp"
+#include "vision/gray_image.hpp"
 
 namespace vgr::tools {
 namespace {
@@ -123,8 +124,10 @@ int runGrab(const GrabOptions& o) {
     auto r = worker.grab(frame, t0 + milliseconds(deadlineMs), &st);
     const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     if (r && !o.saveFolder.empty()) {
-      // Mono8 or host-endian Mono16 (PNG stores 16 bits as they are).
-      const cv::Mat img(frame.height, frame.width, frame.bytesPerPixel() == 2 ? CV_16UC1 : CV_8UC1, frame.data.data());
+      // Mono8 as it is; Mono10/12/16 scaled to the full 16-bit range (vision/gray_image.hpp),
+      // so the tools read back exactly what vgrd locates in.
+      const cv::Mat samples(frame.height, frame.width, frame.bytesPerPixel() == 2 ? CV_16UC1 : CV_8UC1, frame.data.data());
+      const cv::Mat img = vision::toFullRange16(samples, frame.bitDepth);
       const std::string path = fmt::format("{}/frame_{:06d}.png", o.saveFolder, frame.frameId);
       if (!cv::imwrite(path, img)) {
         std::fprintf(stderr, "vgr grab: cannot write %s\n", path.c_str());

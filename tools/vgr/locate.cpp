@@ -8,7 +8,6 @@
 #include <fmt/core.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "config/cell_config.hpp"
 #include "config/job.hpp"
@@ -17,6 +16,7 @@
 #include "daemon/cell_mapping.hpp"
 #include "daemon/job_locator.hpp"
 #include "vision/calib/pixel_mapping.hpp"
+#include "vision/gray_image.hpp"
 #include "vision/locate/locator.hpp"
 #include "vision/part_poses.hpp"
 
@@ -26,7 +26,7 @@ int runLocate(const LocateOptions& o) {
   auto job = config::loadJob(o.job);
   if (!job) return badInput(job.error().message);
   const std::string method = o.method.empty() ? job->method : o.method;
-  const cv::Mat img = cv::imread(o.image, cv::IMREAD_GRAYSCALE);
+  const cv::Mat img = vision::readGray8(o.image).value_or(cv::Mat());
   if (img.empty()) return badInput(o.image + ": cannot read the image");
   // With a calibration (a cell config), pixels map to the robot frame exactly as vgrd maps
   // them: the mapping that cell selects (daemon/cell_mapping.hpp) and vision::partPoses.

@@ -10,6 +10,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "config/job.hpp"
+#include "vision/gray_image.hpp"
 #include "vision/locate/locator.hpp"
 #include "vision/locate/regions.hpp"
 
@@ -40,7 +41,7 @@ bool parseNumbers(const std::string& text, std::size_t n, std::vector<double>& o
 
 int runTeach(const TeachOptions& o) {
   namespace fs = std::filesystem;
-  const cv::Mat img = cv::imread(o.image, cv::IMREAD_GRAYSCALE);
+  const cv::Mat img = vision::readGray8(o.image).value_or(cv::Mat());
   if (img.empty()) return badInput(o.image + ": cannot read the image");
   config::JobFile job;
   job.folder = o.out;

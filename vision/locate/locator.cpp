@@ -6,6 +6,7 @@
 
 #include "vision/locate/contour_weighted_locator.hpp"
 #include "vision/locate/hu_sift_locators.hpp"
+#include "vision/locate/input_check.hpp"
 #include "vision/locate/moments_locator.hpp"
 #include "vision/locate/orb_adk_locator.hpp"
 #include "vision/locate/orb_homography_locator.hpp"
@@ -41,7 +42,11 @@ Result<std::unique_ptr<Locator>> makeLocator(std::string_view method, const cv::
   if (taught.maxParts < 1 || taught.maxParts > 64)
     return fail(Status::BadArgument, fmt::format("{}: max_parts must be in [1, 64], got {}", method, taught.maxParts));
   for (const auto& m : kMethods)
-    if (m.name == method) return m.make(templateGray, taught);
+    if (m.name == method) {
+      auto made = m.make(templateGray, taught);
+      if (!made) return made;
+      return withInputChecks(std::move(*made), templateGray.size(), taught.searchRoi);
+    }
   std::string known;
   for (const auto& m : locatorMethods()) known += (known.empty() ? "" : ", ") + m;
   return fail(Status::BadArgument, fmt::format("unknown locate method '{}' (known: {})", method, known));

@@ -5,6 +5,7 @@
 #include <limits>
 #include <memory>
 #include <numbers>
+#include <optional>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
@@ -13,8 +14,22 @@
 #include "vision/locate/params.hpp"
 
 namespace vgr::vision {
+namespace {
 
-Result<std::vector<Detection>> locateByMoments(const cv::Mat& gray, const MomentsParams& params) {
+// Scale- and rotation-invariant shape of a blob from its (grey-weighted) moments, to compare
+// a live blob with the template's: compactness h1 = (mu20 + mu02) / m00^2 (Hu's first
+// invariant; 1/(2 pi) for a disc), anisotropy of the second moments (0 for a disc, -> 1 for a
+// line) and skewness along the major axis (0 for a shape symmetric about its minor axis).
+struct BlobShape {
+  double areaPx = 0, compactness = 0, anisotropy = 0, skew = 0;
+};
+
+struct Blob {
+  Detection detection;
+  BlobShape shape;
+};
+
+Result<std::vector<Blob>> findBlobs(const cv::Mat& gray, const MomentsParams& params) {
   if (gray.empty() || gray.type() != CV_8UC1) return fail(Status::BadArgument, "moments: expected a non-empty 8-bit gray image");
 
   cv::Mat binary;
@@ -26,7 +41,7 @@ Result<std::vector<Detection>> locateByMoments(const cv::Mat& gray, const Moment
   cv::Mat labels, stats, centroids;
   const int n = cv::connectedComponentsWithStats(binary, labels, stats, centroids, 8, CV_32S);
 
-  std::vector<Detection> out;
+  std::vector<Blob> out;
   const cv::Mat kernel = cv::getStructuringElement(cv::MORPH_RECT, {3, 3});
   for (int i = 1; i < n; ++i) {
     const double area = stats.at<int>(i, cv::CC_STAT_AREA);
@@ -78,9 +93,31 @@ Result<std::vector<Detection>> locateByMoments(const cv::Mat& gray, const Moment
     // the ends are told apart (skewness >= 0.02; sensor noise on a blob of thousands of
     // pixels moves it by well under 0.005).
     d.score = std::min(1.0, anisotropy / 0.1) * std::min(1.0, skew / 0.02);
-    out.push_back(d);
+    out.push_back({d, {m.m00, (m.mu20 + m.mu02) / (m.m00 * m.m00), anisotropy, skew}});
   }
-  std::sort(out.begin(), out.end(), [](const Detection& a, const Detection& b) { return a.score > b.score; });
+  std::sort(out.begin(), out.end(), [](const Blob& a, const Blob& b) { return a.detection.score > b.detection.score; });
+  return out;
+}
+
+// How far a blob's shape is from the template's: the largest relative difference of area and
+// compactness and the largest absolute difference of anisotropy and skewness.
+struct ShapeDifference {
+  double area = 0, shape = 0;
+};
+ShapeDifference shapeDifference(const BlobShape& a, const BlobShape& ref) {
+  return {std::abs(a.areaPx / ref.areaPx - 1),
+          std::max({std::abs(a.compactness / ref.compactness - 1), std::abs(a.anisotropy - ref.anisotropy),
+                    std::abs(a.skew - ref.skew)})};
+}
+
+}  // namespace
+
+Result<std::vector<Detection>> locateByMoments(const cv::Mat& gray, const MomentsParams& params) {
+  auto blobs = findBlobs(gray, params);
+  if (!blobs) return std::unexpected(blobs.error());
+  std::vector<Detection> out;
+  out.reserve(blobs->size());
+  for (const auto& b : *blobs) out.push_back(b.detection);
   return out;
 }
 
@@ -92,8 +129,13 @@ namespace {
 // counter-clockwise turn as displayed by a is (x, y) -> (x cos a + y sin a, -x sin a + y cos a)).
 class MomentsLocator final : public Locator {
  public:
-  MomentsLocator(MomentsParams params, Detection reference, const TaughtTemplate& taught)
-      : params_(params), reference_(reference), taught_(taught) {}
+  // A shape check: the template blob's shape and how far a live blob may be from it.
+  struct ShapeCheck {
+    BlobShape reference;
+    double areaTolerance = 0.25, shapeTolerance = 0.1;
+  };
+  MomentsLocator(MomentsParams params, Detection reference, const TaughtTemplate& taught, std::optional<ShapeCheck> check)
+      : params_(params), reference_(reference), taught_(taught), check_(check) {}
 
   std::string_view method() const override { return "moments"; }
 
@@ -102,12 +144,18 @@ class MomentsLocator final : public Locator {
     cv::Rect roi(0, 0, gray.cols, gray.rows);
     if (!taught_.searchRoi.empty())
       roi &= cv::Rect(taught_.searchRoi.x, taught_.searchRoi.y, taught_.searchRoi.width, taught_.searchRoi.height);
-    auto found = locateByMoments(gray(roi), params_);
+    auto found = findBlobs(gray(roi), params_);
     if (!found) return std::unexpected(found.error());
     LocateOutput out;
     const double gx = taught_.grasp.u - reference_.u, gy = taught_.grasp.v - reference_.v;
-    for (const Detection& d : *found) {
+    for (const Blob& b : *found) {
+      const Detection& d = b.detection;
       if (d.score < taught_.minScore) continue;
+      if (check_) {
+        // Not the taught shape (another part, clutter, two parts touching): no part.
+        const ShapeDifference diff = shapeDifference(b.shape, check_->reference);
+        if (diff.area > check_->areaTolerance || diff.shape > check_->shapeTolerance) continue;
+      }
       const double rot = normaliseDeg(d.angleDeg - reference_.angleDeg);
       if (rot < taught_.angleMinDeg || rot > taught_.angleMaxDeg) continue;
       const double a = rot * std::numbers::pi / 180.0;
@@ -125,6 +173,7 @@ class MomentsLocator final : public Locator {
   MomentsParams params_;
   Detection reference_;
   TaughtTemplate taught_;
+  std::optional<ShapeCheck> check_;
 };
 
 }  // namespace
@@ -135,12 +184,16 @@ Result<std::unique_ptr<Locator>> makeMomentsLocator(const cv::Mat& templateGray,
   p.threshold = r.integer("threshold", 0, 0, 255);
   p.minAreaPx = r.number("min_area_px", p.minAreaPx, 1, 1e9);
   p.maxAreaPx = r.number("max_area_px", p.maxAreaPx, 1, 1e9);
+  MomentsLocator::ShapeCheck check;
+  check.areaTolerance = r.number("area_tolerance", check.areaTolerance, 0, 10);
+  check.shapeTolerance = r.number("shape_tolerance", check.shapeTolerance, 0, 10);
   if (auto ok = r.finish(); !ok) return std::unexpected(ok.error());
   if (p.maxAreaPx <= p.minAreaPx) return fail(Status::BadArgument, "moments: parameter 'max_area_px' must exceed 'min_area_px'");
-  auto ref = locateByMoments(templateGray, p);
+  auto ref = findBlobs(templateGray, p);
   if (!ref) return std::unexpected(ref.error());
   if (ref->empty()) return fail(Status::BadArgument, "moments: no part found in the template image (check threshold and area limits)");
-  return std::make_unique<MomentsLocator>(p, ref->front(), taught);
+  check.reference = ref->front().shape;
+  return std::make_unique<MomentsLocator>(p, ref->front().detection, taught, check);
 }
 
 std::unique_ptr<Locator> makeUntaughtMomentsLocator(const MomentsParams& params) {
@@ -150,7 +203,7 @@ std::unique_ptr<Locator> makeUntaughtMomentsLocator(const MomentsParams& params)
   TaughtTemplate taught;
   taught.minScore = 0;
   taught.maxParts = std::numeric_limits<int>::max();
-  return std::make_unique<MomentsLocator>(params, Detection{}, taught);
+  return std::make_unique<MomentsLocator>(params, Detection{}, taught, std::nullopt);
 }
 
 }  // namespace vgr::vision

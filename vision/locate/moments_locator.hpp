@@ -30,7 +30,10 @@ struct MomentsParams {
 Result<std::vector<Detection>> locateByMoments(const cv::Mat& gray, const MomentsParams& params);
 
 // Method "moments" of a taught job: the template's own blob is the reference (params
-// "threshold", "min_area_px", "max_area_px" from job.yaml).
+// "threshold", "min_area_px", "max_area_px" from job.yaml). A live blob is a part only if
+// its shape is the template blob's: area within "area_tolerance" (relative, default 0.25)
+// and compactness (Hu's first invariant, relative), anisotropy and skewness along the major
+// axis (absolute) within "shape_tolerance" (default 0.1); other shapes are no part.
 Result<std::unique_ptr<Locator>> makeMomentsLocator(const cv::Mat& templateGray, const TaughtTemplate& taught);
 
 // An untaught job (cell config keys threshold / min_area_px / max_area_px, no folder): every
