@@ -84,6 +84,7 @@ TEST_F(classify_vgrd, LabelsEveryPartEndToEnd) {
   j.taught.grasp = j.grasps.front();
   j.taught.minScore = 0;
   j.taught.maxParts = 16;
+  j.taught.params["shape_check"] = "false";  // every blob a candidate: the classifier decides
   renderer.render(800000, img);
   ASSERT_TRUE(cv::imwrite(j.templatePath(), img));
   ASSERT_TRUE(vgr::config::writeJob(j).has_value());

@@ -97,6 +97,8 @@ Result<void> makeJob(const std::string& datasetDir, const std::string& jobDir, i
   job.partHeightMm = t->graspHeightMm;
   job.taught.params["threshold"] = std::to_string(threshold);
   job.taught.params["min_area_px"] = "1500";
+  // Every blob is a candidate: the classifier, not the template's shape, decides what it is.
+  job.taught.params["shape_check"] = "false";
   fs::copy_file(fs::path(datasetDir) / t->image, fs::path(jobDir) / job.templateImage, fs::copy_options::overwrite_existing, ec);
   if (ec) return fail(Status::BadArgument, fmt::format("{}: cannot copy the template: {}", jobDir, ec.message()));
   return config::writeJob(job);

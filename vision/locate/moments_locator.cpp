@@ -187,13 +187,17 @@ Result<std::unique_ptr<Locator>> makeMomentsLocator(const cv::Mat& templateGray,
   MomentsLocator::ShapeCheck check;
   check.areaTolerance = r.number("area_tolerance", check.areaTolerance, 0, 10);
   check.shapeTolerance = r.number("shape_tolerance", check.shapeTolerance, 0, 10);
+  // shape_check: false for a job whose classifier decides what each blob is (paper 002:
+  // every contour is a candidate, the MLP labels or rejects it; tools/vgr/classify.cpp).
+  const bool shapeCheck = r.flag("shape_check", true);
   if (auto ok = r.finish(); !ok) return std::unexpected(ok.error());
   if (p.maxAreaPx <= p.minAreaPx) return fail(Status::BadArgument, "moments: parameter 'max_area_px' must exceed 'min_area_px'");
   auto ref = findBlobs(templateGray, p);
   if (!ref) return std::unexpected(ref.error());
   if (ref->empty()) return fail(Status::BadArgument, "moments: no part found in the template image (check threshold and area limits)");
   check.reference = ref->front().shape;
-  return std::make_unique<MomentsLocator>(p, ref->front().detection, taught, check);
+  return std::make_unique<MomentsLocator>(p, ref->front().detection, taught,
+                                          shapeCheck ? std::optional(check) : std::nullopt);
 }
 
 std::unique_ptr<Locator> makeUntaughtMomentsLocator(const MomentsParams& params) {
