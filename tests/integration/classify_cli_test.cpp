@@ -22,15 +22,9 @@ namespace fs = std::filesystem;
 
 using Run = vgr::test::CommandResult;
 
-Run vgr(const std::string& args) { return vgr::test::runCommand(vgr::test::binPath("vgr") + " " + args + " 2>&1"); }
+Run vgr(const std::string& args) { return vgr::test::runVgr(args); }
 
-std::string lastLine(const std::string& s) {
-  std::istringstream in(s);
-  std::string last;
-  for (std::string l; std::getline(in, l);)
-    if (!l.empty()) last = l;
-  return last;
-}
+using vgr::test::lastLine;
 
 const std::string kScene = "--parts 5 --angle-range 180 --noise 6 --blur 0.8 --illum-ratio 1.3 --clutter 2 --width 800 --height 640";
 const std::string kAll = "disc,ring,hex,square,square_small,rect,rect_notch,flat";

@@ -19,15 +19,9 @@ namespace fs = std::filesystem;
 
 using Run = vgr::test::CommandResult;
 
-Run vgr(const std::string& args) { return vgr::test::runCommand(vgr::test::binPath("vgr") + " " + args + " 2>&1"); }
+Run vgr(const std::string& args) { return vgr::test::runVgr(args); }
 
-std::string lastLine(const std::string& s) {
-  std::istringstream in(s);
-  std::string last;
-  for (std::string l; std::getline(in, l);)
-    if (!l.empty()) last = l;
-  return last;
-}
+using vgr::test::lastLine;
 
 class locate_cli : public ::testing::Test {
  protected:

@@ -8,6 +8,7 @@
 
 #include <array>
 #include <cerrno>
+#include <sstream>
 
 namespace vgr::test {
 
@@ -73,5 +74,15 @@ CommandResult runCommand(const std::string& shellCommand, std::chrono::milliseco
 
 std::string binPath(const std::string& name) { return std::string(VGR_BIN_DIR) + "/" + name; }
 std::string sourcePath(const std::string& relative) { return std::string(VGR_SOURCE_DIR) + "/" + relative; }
+
+CommandResult runVgr(const std::string& args) { return runCommand(binPath("vgr") + " " + args + " 2>&1"); }
+
+std::string lastLine(const std::string& text) {
+  std::istringstream in(text);
+  std::string last;
+  for (std::string l; std::getline(in, l);)
+    if (!l.empty()) last = l;
+  return last;
+}
 
 }  // namespace vgr::test

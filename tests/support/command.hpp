@@ -19,6 +19,12 @@ struct CommandResult {
 CommandResult runCommand(const std::string& shellCommand,
                          std::chrono::milliseconds timeout = std::chrono::milliseconds(240000));
 
+// Our `vgr` tool with `args` (a shell word list), stdout and stderr merged into `out`.
+CommandResult runVgr(const std::string& args);
+
+// The last non-empty line of `text` (a tool's final JSON line).
+std::string lastLine(const std::string& text);
+
 // Path of one of our built executables (VGR_BIN_DIR/<name>), and of a source file
 // (VGR_SOURCE_DIR/<relative>).
 std::string binPath(const std::string& name);
