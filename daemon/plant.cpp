@@ -137,8 +137,9 @@ void Plant::stop() {
   if (mqtt_) mqtt_->stop();
 }
 
-void Plant::cycleDone(const CycleResult& r) {
-  metrics_->cycleDone(r);
+void Plant::cycleDone(const CycleResult& r) { metrics_->cycleDone(r); }
+
+void Plant::resultDelivered(const CycleResult& r) {
   if (mqtt_) {
     lastJob_ = r.jobId;
     mqtt_->publishResult(r);

@@ -54,7 +54,10 @@ class Plant {
   Result<void> start(PlantSources sources);
   void stop();
 
+  // Cycle thread, in vgrd's publish order: cycleDone() first (metrics, cheap), then the PLC,
+  // robots and journal, then resultDelivered() (the MQTT message, built from the journal line).
   void cycleDone(const CycleResult& r);
+  void resultDelivered(const CycleResult& r);
   // Counts a submitted trigger; returns `cycleId` (0 = refused) so a call site can wrap
   // CycleRunner::submit: `return plant.triggered(src, cycles.submit(job, src));`.
   std::uint32_t triggered(TriggerSource source, std::uint32_t cycleId);

@@ -21,7 +21,7 @@ struct CmdRun {
 };
 
 CmdRun vgr(const std::string& args) {
-  const auto r = vgr::test::runCommand(vgr::test::binPath("vgr") + " " + args + " 2>&1");
+  const auto r = vgr::test::runVgr(args);
   return {r.exitCode, r.out};
 }
 

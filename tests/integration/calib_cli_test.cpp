@@ -30,16 +30,11 @@ struct CmdRun {
 };
 
 CmdRun vgr(const std::string& args) {
-  const auto r = vgr::test::runCommand(vgr::test::binPath("vgr") + " " + args + " 2>&1");
+  const auto r = vgr::test::runVgr(args);
   return {r.exitCode, r.out};
 }
 
-std::string lastLine(const std::string& s) {
-  std::string t = s;
-  while (!t.empty() && t.back() == '\n') t.pop_back();
-  const auto nl = t.rfind('\n');
-  return nl == std::string::npos ? t : t.substr(nl + 1);
-}
+using vgr::test::lastLine;
 
 class calib_cli : public ::testing::Test {
  protected:
