@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
-# Installs vgr's build and test dependencies from Debian bookworm packages. Idempotent:
-# packages already present are left alone; apt's lists are refreshed only when something
-# is missing. Run as root (or through sudo).
+# Installs vgr's build and test dependencies from Debian bookworm packages, then the npm
+# packages of the browser test (tests/browser: playwright-core, which drives Debian's
+# chromium; it downloads no browser). Idempotent: packages already present are left alone;
+# apt's lists are refreshed only when something is missing. Run as root (or through sudo).
 set -euo pipefail
+cd "$(dirname "$0")/.."
 
 PACKAGES=(
   build-essential cmake pkg-config ccache git
@@ -17,20 +19,35 @@ PACKAGES=(
   iproute2  # camera_multi_test adds 127.0.0.2 to lo for a second emulated camera
   libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev
+  chromium fonts-dejavu-core  # the commissioning page's browser test (headless) and its screenshots' text
 )
+# Node.js and npm for playwright-core (tests/browser): the machine's own when it has them
+# (the CI image ships Node.js 20 with npm), Debian's otherwise (Node.js 18: playwright-core
+# 1.61 is the last release that runs on it, which is why package.json pins it).
+if ! command -v npm >/dev/null 2>&1; then PACKAGES+=(nodejs npm); fi
 
 missing=()
 for p in "${PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
 
-if [ ${#missing[@]} -eq 0 ]; then
-  echo "install-deps: all ${#PACKAGES[@]} packages present"
-  exit 0
-fi
-
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
-echo "install-deps: installing ${missing[*]}"
-$SUDO apt-get update -qq
-DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${#PACKAGES[@]} packages present"
+else
+  echo "install-deps: installing ${missing[*]}"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+
+# The browser test's npm packages, exactly as package-lock.json pins them (npm ci), unless
+# that very version is installed already.
+want=$(sed -n 's/.*"playwright-core": "\([0-9.]*\)".*/\1/p' tests/browser/package.json)
+have=$(sed -n 's/.*"version": "\([0-9.]*\)".*/\1/p' tests/browser/node_modules/playwright-core/package.json 2>/dev/null | head -1)
+if [ "$want" != "$have" ]; then
+  echo "install-deps: npm ci in tests/browser (playwright-core $want)"
+  (cd tests/browser && PLAYWRIGHT_SKIP_BROWSER_DOWNLOAD=1 npm ci --no-audit --no-fund)
+else
+  echo "install-deps: playwright-core $have present"
+fi
