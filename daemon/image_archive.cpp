@@ -29,7 +29,9 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr int kPngCompression = 1;  // zlib level: fastest; PNG stays lossless at every level
-constexpr int kWriterNice = 10;     // the writer yields the CPU to the cycle thread
+// The writer yields the CPU to the cycle thread when both want it (CFS weight 335 against
+// 1024); more (nice 10: 110) starved it on a loaded machine: frames waited seconds.
+constexpr int kWriterNice = 5;
 
 // Writes `bytes` to path + ".tmp", then renames it to path: a file under its final name is
 // always complete. Error text on failure ("" on success).
@@ -185,9 +187,11 @@ void ImageArchive::run() {
       if (pending_.empty()) return;  // stopping, all written
       slot = pending_.front();
       pending_.pop_front();
+      writing_ = true;
     }
     write(*slot);
     std::lock_guard lock(mutex_);
+    writing_ = false;
     free_.push_back(slot);
   }
 }
@@ -250,7 +254,7 @@ ArchiveCounters ImageArchive::counters() const {
   c.quotaBytes = cfg_.quotaBytes;
   std::lock_guard lock(mutex_);
   c.files = index_.size();
-  c.queued = pending_.size();
+  c.queued = pending_.size() + (writing_ ? 1 : 0);
   return c;
 }
 

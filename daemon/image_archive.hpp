@@ -11,7 +11,7 @@
 //
 // Cost to the cycle thread: offer() decides, and copies a kept frame into one of `queue`
 // preallocated slots (no allocation once warm; a 1280x1024 frame is one ~1.3 MB memcpy).
-// Encoding, writing and the quota run on the archive's own thread (nice +10, below the
+// Encoding, writing and the quota run on the archive's own thread (nice +5, below the
 // cycle thread). A kept frame with no free slot is dropped and counted (its journal line
 // then has no "archive" field); a failed write is counted and logged once per burst.
 // Quota: before each write the oldest frames go until the new one fits (so the folder never
@@ -57,7 +57,7 @@ struct ArchiveCounters {
   std::uint64_t bytes = 0;        // bytes in the archive now (PNG + JSON)
   std::uint64_t files = 0;        // frames in the archive now
   std::uint64_t quotaBytes = 0;
-  std::uint64_t queued = 0;       // frames waiting for the disk
+  std::uint64_t queued = 0;       // frames waiting for the disk (the one being written included)
 };
 
 struct ArchivedFrame {
@@ -107,6 +107,7 @@ class ImageArchive {
   std::vector<std::unique_ptr<Slot>> slots_;
   std::vector<Slot*> free_;      // mutex_
   std::deque<Slot*> pending_;    // mutex_
+  bool writing_ = false;         // mutex_: the writer holds a slot
   std::deque<ArchivedFrame> index_;  // mutex_: oldest first
   std::uint64_t okSeen_ = 0;     // cycle thread: OK cycles with a frame
   std::atomic<std::uint64_t> written_{0}, dropped_{0}, deleted_{0}, writeErrors_{0}, bytes_{0};

@@ -84,8 +84,11 @@ cv::Mat drawOverlay(const cv::Mat& gray, const OverlayFrame& frame, double scale
 
   const PixelRect& roi = frame.job.searchRoi;
   if (!roi.empty())
-    cv::rectangle(out, fixed(px(roi.x - 0.5), px(roi.y - 0.5)), fixed(px(roi.x + roi.width - 0.5), px(roi.y + roi.height - 0.5)),
-                  kRoiColour, line, cv::LINE_AA, kShift);
+    // On the ROI's boundary pixels (whole pixels: a crisp line).
+    cv::rectangle(out, cv::Point(static_cast<int>(std::lround(px(roi.x))), static_cast<int>(std::lround(px(roi.y)))),
+                  cv::Point(static_cast<int>(std::lround(px(roi.x + roi.width - 1))),
+                            static_cast<int>(std::lround(px(roi.y + roi.height - 1)))),
+                  kRoiColour, line, cv::LINE_8);
 
   int rank = 0;
   for (const auto& p : frame.parts) {

@@ -5,7 +5,7 @@
 //
 // Drawn on a colour copy of the gray image (optionally scaled, coordinates scaled with it,
 // lines and text sized for the output, not the input):
-//   - the search ROI: a yellow rectangle (BGR 0,220,255), when the job has one;
+//   - the search ROI: a yellow rectangle (BGR 0,220,255) on its boundary pixels, when the job has one;
 //   - each part: its template's outline turned by the part's angle about the grasp point
 //     (green, when the template size is known), the part's axis (green arrow, 0 deg = the
 //     template's +x, counter-clockwise as displayed), and the grasp point: a filled magenta

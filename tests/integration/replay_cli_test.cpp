@@ -3,7 +3,9 @@
 //   - the unchanged job replayed on the archive reproduces every cycle (exit 0, 0 differ):
 //     the same pixels, the same locator, the same mapping as vgrd;
 //   - the job with min_score raised between two scores the cell delivered reports exactly
-//     the cycles whose score is below it, each OK -> NO_PART_FOUND, and nothing else (exit 1);
+//     the cycles whose result changes (found independently: `vgr locate` of the changed job
+//     on each archived PNG), each OK -> NO_PART_FOUND, and nothing else (exit 1); those
+//     include every cycle scored below the new min_score;
 //   - a frame deleted from the archive is counted missing; bad input exits 2.
 #include <algorithm>
 #include <filesystem>
@@ -58,14 +60,19 @@ TEST_F(replay_cli, ReportsExactlyTheFramesAChangedMinScoreChanges) {
     yaml.replace(a, b - a, "jobs:\n  - id: 1\n    name: part\n    folder: " + job + "\n");
     yaml.replace(yaml.find("\nsim:\n"), 6, "\nsim:\n  scene: part\n");
     yaml.replace(yaml.find("cycle_deadline_ms: 1500"), 23, "cycle_deadline_ms: 10000");  // timing-free (see locate_vgrd_methods)
-    return yaml + "\narchive:\n  every_nth_good: 1\n  quota_mb: 200\n";
+    return yaml + "\narchive:\n  every_nth_good: 1\n  quota_mb: 200\n  queue: 64\n";  // no drops on a loaded machine
   }));
   constexpr int kCycles = 14;
   std::vector<std::uint32_t> cycles;
   ASSERT_NO_FATAL_FAILURE(triggerCycles(kCycles, 1, 10s, cycles));
   ASSERT_FALSE(journalEntry(cycles.back()).is_null());
-  std::this_thread::sleep_for(500ms);  // the archive writes the last frame
   const std::string archive = (dir_ / "archive").string();
+  // The archive writes behind the cycles (a niced thread): wait for every frame the journal names.
+  for (auto until = Clock::now() + 30s; Clock::now() < until; std::this_thread::sleep_for(100ms)) {
+    bool all = true;
+    for (const auto& j : journal()) all = all && j.contains("archive") && fs::exists(fs::path(archive) / j["archive"].get<std::string>());
+    if (all) break;
+  }
   const std::string base = "replay --journal " + journalPath() + " --archive " + archive + " --config " + configPath_;
 
   // 1. The unchanged job reproduces every cycle.
@@ -91,8 +98,6 @@ TEST_F(replay_cli, ReportsExactlyTheFramesAChangedMinScoreChanges) {
     if (scores[i + 1].first - scores[i].first > gap) gap = scores[i + 1].first - scores[i].first, cut = i;
   ASSERT_GE(gap, 0.002) << "the scores do not spread enough to put a threshold between them";
   const double threshold = (scores[cut].first + scores[cut + 1].first) / 2;
-  std::set<std::uint32_t> expected;
-  for (std::size_t i = 0; i <= cut; ++i) expected.insert(scores[i].second);
 
   const fs::path changed = jobRoot_ / "job-changed";
   fs::copy(job, changed, fs::copy_options::recursive);
@@ -103,6 +108,24 @@ TEST_F(replay_cli, ReportsExactlyTheFramesAChangedMinScoreChanges) {
   }
   yaml = std::regex_replace(yaml, std::regex("min_score: [0-9.]+"), "min_score: " + std::to_string(threshold));
   std::ofstream(changed / "job.yaml") << yaml;
+  // What changes, found without replay: `vgr locate` of the changed job on each archived
+  // PNG, its status against the journal's. (For `shape`, min_score also prunes the search
+  // pyramid, so a raise can lose a part whose final score is above it: not only the cycles
+  // scored below it change.)
+  std::set<std::uint32_t> expected;
+  for (const auto& j : journal()) {
+    const auto l = vgr::test::runVgr("locate --json --job " + changed.string() + " --image " + archive + "/" +
+                                     j["archive"].get<std::string>());
+    const auto lj = nlohmann::json::parse(vgr::test::lastLine(l.out), nullptr, false);
+    ASSERT_TRUE(lj.is_object()) << l.out;
+    if (lj["status"] != j["status"]) expected.insert(j["cycle"].get<std::uint32_t>());
+  }
+  for (std::size_t i = 0; i <= cut; ++i)
+    EXPECT_TRUE(expected.count(scores[i].second)) << "cycle " << scores[i].second << " scored " << scores[i].first
+                                                  << " < " << threshold << " and is still found";
+  ASSERT_FALSE(expected.empty());
+  ASSERT_LT(expected.size(), scores.size()) << "the threshold must leave some cycles as they were";
+
   const auto diff = vgr::test::runVgr(base + " --job " + changed.string() + " --job-id 1 --json");
   EXPECT_EQ(diff.exitCode, 1) << diff.out;
   const auto d = nlohmann::json::parse(vgr::test::lastLine(diff.out), nullptr, false);
@@ -116,6 +139,7 @@ TEST_F(replay_cli, ReportsExactlyTheFramesAChangedMinScoreChanges) {
   }
   EXPECT_EQ(reported, expected) << "threshold " << threshold << "\n" << d.dump(2);
   EXPECT_EQ(d["summary"]["differ"], expected.size());
+  EXPECT_EQ(d["summary"]["same"], scores.size() - expected.size());
   EXPECT_EQ(d["summary"]["status_changed"], expected.size());
   EXPECT_EQ(d["summary"]["transitions"]["OK -> NO_PART_FOUND"], expected.size());
 

@@ -59,9 +59,9 @@ class image_archive : public ::testing::Test {
     return m;
   }
 
-  // Waits until the archive has written `n` frames in all (2 s at most).
+  // Waits until the archive has written `n` frames in all (20 s at most: the writer is niced).
   static void waitWritten(const ImageArchive& a, std::uint64_t n) {
-    const auto until = std::chrono::steady_clock::now() + 2s;
+    const auto until = std::chrono::steady_clock::now() + 20s;
     while (a.counters().written + a.counters().writeErrors < n && std::chrono::steady_clock::now() < until)
       std::this_thread::sleep_for(2ms);
   }

@@ -13,8 +13,10 @@ using vgr::vision::OverlayFrame;
 using vgr::vision::OverlayPart;
 
 bool magenta(const cv::Vec3b& p) { return p[0] > 200 && p[1] < 60 && p[2] > 200; }  // BGR
-bool green(const cv::Vec3b& p) { return p[1] > 150 && p[0] < 120 && p[2] < 120; }
-bool yellow(const cv::Vec3b& p) { return p[1] > 150 && p[2] > 200 && p[0] < 60; }
+// Lines are anti-aliased: an edge on a half pixel is half its colour on each side, so the
+// colour tests look at the hue (which channels stand out), not at full intensity.
+bool green(const cv::Vec3b& p) { return p[1] > p[0] + 40 && p[1] > p[2] + 40; }
+bool yellow(const cv::Vec3b& p) { return p[2] > p[0] + 60 && p[1] > p[0] + 50; }
 
 TEST(overlay, GraspDiscSitsOnThePartAndNowhereElse) {
   const cv::Mat gray(400, 600, CV_8UC1, cv::Scalar(40));
@@ -44,9 +46,11 @@ TEST(overlay, RoiEdgeAndTemplateOutlineTurnWithThePart) {
   f.job.templateGrasp = {50, 20};
   f.parts = {{300.0, 250.0, 90.0, 0.9, 0}};  // turned 90 deg CCW as displayed: the long side is vertical
   const cv::Mat out = vgr::vision::drawOverlay(gray, f);
-  // ROI: left edge at x = 99.5, top at y = 49.5.
-  EXPECT_TRUE(yellow(out.at<cv::Vec3b>(150, 99)) || yellow(out.at<cv::Vec3b>(150, 100)));
-  EXPECT_TRUE(yellow(out.at<cv::Vec3b>(49, 200)) || yellow(out.at<cv::Vec3b>(50, 200)));
+  // ROI: drawn on its boundary pixels, x = 100 and y = 50.
+  EXPECT_TRUE(yellow(out.at<cv::Vec3b>(150, 100)));
+  EXPECT_TRUE(yellow(out.at<cv::Vec3b>(50, 200)));
+  EXPECT_TRUE(yellow(out.at<cv::Vec3b>(150, 399)));
+  EXPECT_FALSE(yellow(out.at<cv::Vec3b>(150, 98)));
   EXPECT_FALSE(yellow(out.at<cv::Vec3b>(150, 200)));
   // Outline: the template's 101 px side now runs vertically through y = 250 +- 50.5 at x = 300 +- 20.5.
   auto greenNear = [&](int row, int col) {
