@@ -239,8 +239,13 @@ struct WebPage::Impl {
       auto jpeg = liveJpeg;
       lock.unlock();
       for (auto& w : waiting) w(jpeg ? jpegReply(jpeg, cycle, scale) : errorReply(404, "no cycle yet"));
-      if (fresh)
-        boost::asio::post(io, [this, cycle] { server.broadcast(json{{"type", "image"}, {"cycle", cycle}}.dump()); });
+      if (fresh) {
+        // The picture itself to every watching page, in one binary message: a JSON line
+        // {"type":"image","cycle","scale"}, '\n', the JPEG (no second round trip).
+        std::string msg = json{{"type", "image"}, {"cycle", cycle}, {"scale", scale}}.dump() + "\n";
+        msg += *jpeg;
+        boost::asio::post(io, [this, m = std::move(msg)]() mutable { server.broadcastBinary(std::move(m)); });
+      }
     }
   }
 

@@ -11,8 +11,9 @@
 //   GET  /api/archive         the archived frames, newest first (?n=, <= 1000)
 //   GET  /api/archive.jpg?name=STEM.png   an archived cycle's frame with its overlay
 //   GET  /ws                  WebSocket: {"type":"cycle","cycle":<journal line>} for every
-//                             cycle as it ends, {"type":"image","cycle":N} when the live
-//                             image of cycle N is ready, {"type":"status",...} on connect
+//                             cycle as it ends; the live picture of cycle N as soon as it is
+//                             drawn, as one binary message: {"type":"image","cycle":N,
+//                             "scale":s} '\n' JPEG; {"type":"status",...} on connect
 //   POST /api/trigger?job=N   operator actions (web.actions, from web.allowed_clients only,
 //   POST /api/job?id=N        with the header X-Vgr-Action: 1): a cycle of job N (0 or none =
 //                             the default job); switch the default job. 403 otherwise.

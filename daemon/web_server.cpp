@@ -125,14 +125,22 @@ class WebServer::Impl::WsSession : public std::enable_shared_from_this<WsSession
     });
   }
 
-  void send(std::shared_ptr<const std::string> msg) {
+  struct Message {
+    std::shared_ptr<const std::string> data;
+    bool binary = false;
+  };
+
+  void send(std::shared_ptr<const std::string> msg, bool binary = false) {
     if (closed_) return;
+    if (binary)  // a newer picture replaces one still waiting (not the one being written)
+      for (auto it = queue_.begin() + (writing_ && !queue_.empty() ? 1 : 0); it != queue_.end();)
+        it = it->binary ? queue_.erase(it) : it + 1;
     if (queue_.size() >= kWsQueue) {
       // The client reads too slowly: drop its oldest waiting message (not the one being written).
       queue_.erase(queue_.begin() + (writing_ ? 1 : 0));
       server_->wsDropped++;
     }
-    queue_.push_back(std::move(msg));
+    queue_.push_back({std::move(msg), binary});
     if (!writing_) doWrite();
   }
 
@@ -159,8 +167,8 @@ class WebServer::Impl::WsSession : public std::enable_shared_from_this<WsSession
 
   void doWrite() {
     writing_ = true;
-    ws_.text(true);
-    ws_.async_write(asio::buffer(*queue_.front()), [self = shared_from_this()](const error_code& ec, std::size_t) {
+    ws_.binary(queue_.front().binary);
+    ws_.async_write(asio::buffer(*queue_.front().data), [self = shared_from_this()](const error_code& ec, std::size_t) {
       if (!self->queue_.empty()) self->queue_.pop_front();
       if (ec) return self->close();
       if (self->queue_.empty()) {
@@ -174,7 +182,7 @@ class WebServer::Impl::WsSession : public std::enable_shared_from_this<WsSession
   std::shared_ptr<Impl> server_;
   websocket::stream<beast::tcp_stream> ws_;
   beast::flat_buffer buffer_;
-  std::deque<std::shared_ptr<const std::string>> queue_;
+  std::deque<Message> queue_;
   bool writing_ = false;
   bool closed_ = false;
 };
@@ -345,6 +353,12 @@ void WebServer::broadcast(std::string text) {
   if (impl_->wsSessions.empty()) return;
   auto msg = std::make_shared<const std::string>(std::move(text));
   for (const auto& ws : impl_->wsSessions) asio::post(ws->executor(), [ws, msg] { ws->send(msg); });
+}
+
+void WebServer::broadcastBinary(std::string bytes) {
+  if (impl_->wsSessions.empty()) return;
+  auto msg = std::make_shared<const std::string>(std::move(bytes));
+  for (const auto& ws : impl_->wsSessions) asio::post(ws->executor(), [ws, msg] { ws->send(msg, true); });
 }
 
 WebSocketCounters WebServer::websocketCounters() const {

@@ -86,6 +86,9 @@ class WebServer {
   void websocket(const std::string& path, std::function<std::string()> onOpen = nullptr);
   // I/O thread: one text message to every WebSocket client.
   void broadcast(std::string text);
+  // I/O thread: one binary message to every WebSocket client. A binary message still
+  // waiting in a client's queue is replaced by the newer one (a picture only matters newest).
+  void broadcastBinary(std::string bytes);
   WebSocketCounters websocketCounters() const;  // any thread
 
   // Binds and listens; the error names the address ("web 127.0.0.1:8080: Address in use").
