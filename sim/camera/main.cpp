@@ -12,6 +12,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "core/cli.hpp"
+
 #include "config/cell_config.hpp"
 #include "core/log.hpp"
 #include "sim/camera/emulator.hpp"
@@ -25,6 +27,7 @@ void onPulse(int) { gPulses = gPulses + 1; }
 
 int main(int argc, char** argv) {
   CLI::App app{"vgr-sim-camera: GigE Vision camera emulator serving rendered scenes with ground truth"};
+  vgr::cli::showDefaults(app);
   std::string configPath, address, serial, truthPath, imagesFolder, scene;
   std::vector<std::string> cameraSpecs;
   long long seed = -1;
@@ -46,7 +49,7 @@ int main(int argc, char** argv) {
   app.add_option("--empty-every", emptyEvery, "every N-th frame shows the empty belt (no part): a cell where every N-th cycle fails")
       ->check(CLI::Range(0, 1000000));
   app.add_option("--truth", truthPath, "append one JSON line of ground truth per served frame to this file (first camera)");
-  CLI11_PARSE(app, argc, argv);
+  if (const auto rc = vgr::cli::parse(app, argc, argv)) return *rc;
 
   auto cfg = configPath.empty() ? vgr::config::parseCellConfig(vgr::config::embeddedSimCellYaml(), "<embedded sim-cell.yaml>")
                                 : vgr::config::loadCellConfig(configPath);
