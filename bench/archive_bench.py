@@ -72,7 +72,7 @@ def wait_for(path, needle, timeout):
     return False
 
 
-def run_block(args, work, mode, seconds, journal, archive):
+def run_block(args, work, mode, seconds, journal, archive, block):
     cfg = os.path.join(work, f"cell-{mode}.yaml")
     with open(os.path.join(ROOT, "config/examples/sim-cell.yaml")) as f:
         yaml = f.read()
@@ -85,7 +85,7 @@ def run_block(args, work, mode, seconds, journal, archive):
     cam = subprocess.Popen([os.path.join(args.bin, "vgr-sim-camera"), "--config", cfg, "--empty-every", str(args.empty_every)],
                            stdout=subprocess.PIPE, stderr=log, text=True)
     cam.stdout.readline()  # its ready line
-    vlog = os.path.join(work, f"vgrd-{mode}.log")
+    vlog = os.path.join(work, f"vgrd-{mode}-{block}.log")  # one per start: "ready" is this start's
     vgrd = subprocess.Popen([os.path.join(args.bin, "vgrd"), "--config", cfg, "--journal", journal], stdout=log,
                             stderr=open(vlog, "a"))
     if not wait_for(vlog, "ready: camera streaming", 30):
@@ -116,6 +116,8 @@ def run_block(args, work, mode, seconds, journal, archive):
     cam.send_signal(signal.SIGTERM)
     cam.wait(timeout=20)
     lat = [json.loads(l)["latency_ms"] for l in plc.stdout.splitlines() if l.startswith("{") and "latency_ms" in l]
+    if not lat:
+        raise SystemExit(f"block {block} {mode}: the PLC got no result: {plc.stdout[-500:]} {plc.stderr[-500:]}")
     return {"cycles": cycles, "answered": len(lat), "elapsed_s": elapsed, "plc_latency_ms": lat,
             "cpu_s": cpu1 - cpu0, "peak_bytes": peak[0]}
 
@@ -151,7 +153,7 @@ def main():
     load = [os.getloadavg()]
     for b in range(args.blocks):
         for mode in (("archive", "none") if b % 2 == 0 else ("none", "archive")):
-            r = run_block(args, work, mode, args.block_minutes * 60, journals[mode], archive)
+            r = run_block(args, work, mode, args.block_minutes * 60, journals[mode], archive, b)
             res[mode].append(r)
             print(f"block {b + 1} {mode}: {r['answered']}/{r['cycles']} cycles in {r['elapsed_s']:.0f} s, "
                   f"p99 {pct(r['plc_latency_ms'], 99):.1f} ms, cpu {r['cpu_s']:.1f} s, peak {r['peak_bytes'] / 1e6:.2f} MB",
@@ -163,6 +165,7 @@ def main():
         lat = [x for r in res[mode] for x in r["plc_latency_ms"]]
         lines = journal_lines(journals[mode])
         total = [l["total_ms"] for l in lines]
+        total_ok = [l["total_ms"] for l in lines if l["status"] == 0]
         cycles = sum(r["answered"] for r in res[mode])
         secs = sum(r["elapsed_s"] for r in res[mode])
         summary[mode] = {
@@ -170,6 +173,7 @@ def main():
             "failed": sum(1 for l in lines if l["status"] != 0),
             "plc_latency_p50_ms": pct(lat, 50), "plc_latency_p99_ms": pct(lat, 99),
             "total_ms_p50": pct(total, 50), "total_ms_p99": pct(total, 99),
+            "total_ms_ok_p50": pct(total_ok, 50), "total_ms_ok_p99": pct(total_ok, 99),
             "cpu_ms_per_cycle": 1000 * sum(r["cpu_s"] for r in res[mode]) / max(1, cycles),
         }
     # The archive's rules over the whole archive run.
