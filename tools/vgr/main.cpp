@@ -6,6 +6,7 @@
 //   vgr calibrate intrinsics|handeye|plane|synth ...   calibration (docs/calibration.md)
 //   vgr sim render | teach | locate | eval   localization datasets, jobs, runs (docs/localization.md)
 //   vgr classify train | eval   paper 002's part classifier (docs/classification.md)
+//   vgr replay --journal J --archive A --job DIR   a changed job on archived frames (docs/commissioning.md)
 #include <map>
 #include <memory>
 #include <string>
@@ -29,6 +30,7 @@
 #include "tools/vgr/eval.hpp"
 #include "tools/vgr/grab.hpp"
 #include "tools/vgr/locate.hpp"
+#include "tools/vgr/replay.hpp"
 #include "tools/vgr/sim_render.hpp"
 #include "tools/vgr/subcommand.hpp"
 #include "tools/vgr/teach.hpp"
@@ -76,6 +78,7 @@ int main(int argc, char** argv) {
       {nullptr, std::make_unique<tools::TeachCommand>()},
       {nullptr, std::make_unique<tools::LocateCommand>()},
       {nullptr, std::make_unique<tools::EvalCommand>()},
+      {nullptr, std::make_unique<tools::ReplayCommand>()},
       {"classify", std::make_unique<tools::ClassifyTrainCommand>()},
       {"classify", std::make_unique<tools::ClassifyEvalCommand>()},
   };
