@@ -15,6 +15,7 @@
 #include "core/log.hpp"
 #include "daemon/cycle_runner.hpp"
 #include "daemon/journal.hpp"
+#include "daemon/metrics.hpp"
 #include "daemon/plc_links.hpp"
 #include "daemon/result_store.hpp"
 #include "drivers/camera.hpp"
@@ -140,6 +141,7 @@ VgrdApp::~VgrdApp() {
 Result<void> VgrdApp::start() {
   Impl& s = *impl_;
   if (auto r = s.journal.open(s.cfg.journalPath); !r) return r;
+  s.journal.setRobots(journalRobots(s.cfg));
 
   auto cam = drivers::makeCamera(s.cfg.camera);
   if (!cam) return std::unexpected(cam.error());
@@ -149,6 +151,17 @@ Result<void> VgrdApp::start() {
   for (const auto& j : s.cfg.jobs) jobs.insert(j.id);
   s.results = std::make_unique<ResultStore>(s.io, jobs);
   s.plant = std::make_unique<Plant>(s.io, s.cfg);
+  {
+    // Calibration age and drift in /metrics (docs/plant.md).
+    const auto& c = s.cfg.calibration;
+    std::vector<std::pair<std::string, std::string>> files;
+    for (const auto& [label, path] : {std::pair{"intrinsics", c.intrinsics}, std::pair{"handeye", c.handeye},
+                                      std::pair{"plane", c.plane}, std::pair{"multiheight", c.multiHeight},
+                                      std::pair{"check", c.check}})
+      if (!path.empty()) files.emplace_back(label, path);
+    s.plant->metrics().watchCalibrationFiles(std::move(files));
+    if (c.drift.enabled) s.plant->metrics().enableDrift();
+  }
   s.results->setTrigger([&s](int jobId) {
     return s.plant->triggered(TriggerSource::Robot, s.cycles->submit(jobId, TriggerSource::Robot));
   });
@@ -184,7 +197,10 @@ Result<void> VgrdApp::start() {
     policy.replyDeadlineMs = rc.replyDeadlineMs;
     policy.order = rc.partOrder;
     policy.label = rc.label;
-    s.results->addRobot(rc.name, policy);
+    s.results->addRobot(rc.name, policy, RobotDelivery{rc.dialect, {rc.delivery, rc.baseFromUser}});
+    if (rc.delivery == config::Delivery::Offset || rc.frameName != "base")
+      log::info("main", "robot {}: {} dialect, {} in frame '{}'", rc.name, config::dialectName(rc.dialect),
+                rc.delivery == config::Delivery::Offset ? "offsets from the job's reference" : "poses", rc.frameName);
 
     auto server = std::make_unique<protocol::RobotServer>(
         s.io, ep, [&s](const std::string& robot, const protocol::RobotRequest& req, protocol::ReplyFn reply) {
