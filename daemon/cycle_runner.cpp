@@ -105,7 +105,12 @@ Result<void> CycleRunner::prepareJobs() {
   }
   return {};
 }
-void CycleRunner::start() { thread_ = std::thread([this] { run(); }); }
+void CycleRunner::start() {
+  thread_ = std::thread([this] {
+    nameThisThread("vgr-cycle");
+    run();
+  });
+}
 
 void CycleRunner::stop() {
   {
@@ -114,6 +119,10 @@ void CycleRunner::stop() {
   }
   cv_.notify_all();
   if (thread_.joinable()) thread_.join();
+}
+
+std::chrono::milliseconds CycleRunner::stallLimit() const {
+  return milliseconds(cell_.cycleDeadlineMs) + milliseconds(2000);
 }
 
 std::uint32_t firstCycleIdAfter(std::uint32_t last) { return last == 0 || last >= kMaxCycleId ? 1 : last + 1; }
@@ -146,7 +155,10 @@ void CycleRunner::run() {
     Trigger t;
     {
       std::unique_lock lock(mutex_);
-      cv_.wait(lock, [this] { return stopping_ || !queue_.empty(); });
+      // Bounded waits, a beat at each: an idle cycle thread is alive (daemon/watchdog.hpp).
+      heartbeat_.beat();
+      while (!cv_.wait_for(lock, kIdleBeat, [this] { return stopping_ || !queue_.empty(); })) heartbeat_.beat();
+      heartbeat_.beat();
       if (queue_.empty()) return;  // stopping with nothing left
       t = queue_.front();
       queue_.pop_front();

@@ -30,6 +30,7 @@
 
 #include "config/cell_config.hpp"
 #include "core/cycle.hpp"
+#include "core/heartbeat.hpp"
 #include "drivers/camera_worker.hpp"
 #include "vision/calib/pixel_mapping.hpp"
 #include "vision/locate/locator.hpp"
@@ -70,6 +71,14 @@ class CycleRunner {
 
   std::uint64_t overruns() const { return overruns_.load(); }
 
+  // Beaten by the cycle thread at least every kIdleBeat while idle and after every cycle;
+  // read by vgrd's watchdog (daemon/watchdog.hpp). A cycle ends by its deadline (the grab
+  // waits at most until then; a locator overrunning it is -5 but still has to return), so
+  // the longest legitimate silence is one deadline: stallLimit() = cycle_deadline_ms + 2 s.
+  const Heartbeat& heartbeat() const { return heartbeat_; }
+  std::chrono::milliseconds stallLimit() const;
+  static constexpr std::chrono::milliseconds kIdleBeat{500};
+
   // Before start(): the id of the first cycle (vgrd: firstCycleIdAfter(the journal's last
   // cycle), so ids do not repeat across restarts). Outside [1, kMaxCycleId]: 1.
   void setFirstCycleId(std::uint32_t id);
@@ -100,6 +109,7 @@ class CycleRunner {
   bool stopping_ = false;
   std::uint32_t nextCycleId_ = 1;
   std::atomic<std::uint64_t> overruns_{0};
+  Heartbeat heartbeat_;
   drivers::Frame frame_;
   struct PreparedJob {
     std::unique_ptr<vision::Locator> locator;

@@ -18,6 +18,7 @@
 #include "daemon/metrics.hpp"
 #include "daemon/plc_links.hpp"
 #include "daemon/result_store.hpp"
+#include "daemon/watchdog.hpp"
 #include "drivers/camera.hpp"
 #include "daemon/plant.hpp"
 #include "drivers/camera_worker.hpp"
@@ -45,7 +46,9 @@ struct VgrdApp::Impl {
   std::vector<std::unique_ptr<protocol::RobotServer>> robots;
   std::unique_ptr<Plant> plant;  // metrics + web server (daemon/plant.hpp)
   bool notifiedReady = false;
-  std::uint64_t watchdogUsec = 0;
+  std::uint64_t watchdogUsec = 0;  // systemd's WatchdogSec in µs; 0 = not asked for pings
+  Watchdog watchdog;               // every long-lived thread's heartbeat (daemon/watchdog.hpp)
+  bool stallReported = false;
 
   explicit Impl(config::CellConfig c) : cfg(std::move(c)) {}
 
@@ -104,12 +107,37 @@ struct VgrdApp::Impl {
     });
   }
 
-  void kickWatchdog() {
-    sd_notify(0, "WATCHDOG=1");
-    watchdogTimer.expires_after(std::chrono::microseconds(watchdogUsec / 2));
+  // I/O thread, every checkPeriod(): WATCHDOG=1 only while every watched thread beats
+  // within its stall limit (the I/O thread proves itself by running this). A stall is
+  // logged once when it starts (naming the thread) and once when it ends; systemd, which
+  // gets no pings meanwhile, kills vgrd WatchdogSec after the last one.
+  void checkWatchdog() {
+    const auto stalls = watchdog.stalled(Watchdog::Clock::now());
+    if (stalls.empty()) {
+      if (stallReported) {
+        log::info("main", "watchdog: every thread makes progress again; pings resumed");
+        sd_notify(0, "STATUS=running");
+      }
+      stallReported = false;
+      if (watchdogUsec > 0) sd_notify(0, "WATCHDOG=1");
+    } else if (!stallReported) {
+      stallReported = true;
+      const Watchdog::Stall& s = stalls.front();
+      log::error("main", "watchdog: the {} thread has made no progress for {} ms (limit {} ms){}", s.thread,
+                 s.silentFor.count(), s.limit.count(),
+                 watchdogUsec > 0 ? "; WATCHDOG=1 withheld, systemd will restart vgrd" : "");
+      sd_notifyf(0, "STATUS=%s thread stalled", s.thread.c_str());
+    }
+    watchdogTimer.expires_after(checkPeriod());
     watchdogTimer.async_wait([this](const boost::system::error_code& ec) {
-      if (!ec) kickWatchdog();
+      if (!ec) checkWatchdog();
     });
+  }
+  // A quarter of WatchdogSec (systemd's advice is half; a quarter leaves room for a late
+  // timer), at most 1 s, so a stall is noticed within a second of its limit.
+  std::chrono::microseconds checkPeriod() const {
+    const std::uint64_t us = watchdogUsec > 0 ? std::min<std::uint64_t>(watchdogUsec / 4, 1'000'000) : 1'000'000;
+    return std::chrono::microseconds(std::max<std::uint64_t>(us, 10'000));
   }
 
   void logStats() {
@@ -223,6 +251,10 @@ Result<void> VgrdApp::start() {
 
   s.camera->start();
   s.cycles->start();
+  s.watchdog.watch("cycle", s.cycles->heartbeat(), s.cycles->stallLimit());
+  s.watchdog.watch("camera", s.camera->heartbeat(), drivers::CameraWorker::kStallLimit);
+  for (const auto& plc : s.plcs)
+    s.watchdog.watch(plc->describe(), plc->heartbeat(), plc->stallLimit());
   return {};
 }
 
@@ -234,7 +266,11 @@ int VgrdApp::run() {
     sd_notify(0, "STOPPING=1");
     s.io.stop();
   });
-  if (sd_watchdog_enabled(0, &s.watchdogUsec) > 0 && s.watchdogUsec > 0) s.kickWatchdog();
+  if (sd_watchdog_enabled(0, &s.watchdogUsec) <= 0) s.watchdogUsec = 0;
+  if (s.watchdogUsec > 0)
+    log::info("main", "systemd watchdog: {} ms; WATCHDOG=1 only while the {} watched threads make progress",
+              s.watchdogUsec / 1000, s.watchdog.size());
+  s.checkWatchdog();
   s.waitOperatorTrigger();
   s.checkReady();
   s.statsTimer.expires_after(std::chrono::seconds(60));

@@ -16,6 +16,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "core/cli.hpp"
+
 #include "config/cell_config.hpp"
 #include "core/log.hpp"
 #include "sim/camera/emulator.hpp"
@@ -29,6 +31,7 @@ void onPulse(int) { gPulses = gPulses + 1; }
 
 int main(int argc, char** argv) {
   CLI::App app{"vgr-sim-camera: GigE Vision camera emulator serving rendered scenes with ground truth"};
+  vgr::cli::showDefaults(app);
   std::string configPath, address, serial, truthPath, imagesFolder, scene;
   std::vector<std::string> cameraSpecs;
   long long seed = -1;
@@ -51,7 +54,7 @@ int main(int argc, char** argv) {
   app.add_flag("--still", still, "every frame shows frame 1's scene (only the noise changes): sim.still");
   app.add_option("--camera-shift", shift, "X,Y[,Z[,RZ]]: render through a camera moved by this many mm (deg): sim.camera_shift");
   app.add_option("--truth", truthPath, "append one JSON line of ground truth per served frame to this file (first camera)");
-  CLI11_PARSE(app, argc, argv);
+  if (const auto rc = vgr::cli::parse(app, argc, argv)) return *rc;
 
   auto cfg = configPath.empty() ? vgr::config::parseCellConfig(vgr::config::embeddedSimCellYaml(), "<embedded sim-cell.yaml>")
                                 : vgr::config::loadCellConfig(configPath);

@@ -15,6 +15,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "core/cli.hpp"
+
 #include "core/version.hpp"
 
 #include "tools/vgr/calibrate_handeye.hpp"
@@ -59,6 +61,7 @@ struct Entry {
 int main(int argc, char** argv) {
   namespace tools = vgr::tools;
   CLI::App app{"vgr: vision-guided robotics tool"};
+  vgr::cli::showDefaults(app);
   app.set_version_flag("--version", std::string("vgr ") + vgr::buildVersion());
   app.require_subcommand(1);
 
@@ -96,7 +99,7 @@ int main(int argc, char** argv) {
   std::vector<std::pair<CLI::App*, Subcommand*>> added;
   for (auto& e : table) added.emplace_back(e.command->add(e.group ? *groupApp(e.group) : app), e.command.get());
 
-  CLI11_PARSE(app, argc, argv);
+  if (const auto rc = vgr::cli::parse(app, argc, argv)) return *rc;
   for (const auto& [cli, command] : added)
     if (*cli) return command->run();
   return 0;
