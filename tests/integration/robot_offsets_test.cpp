@@ -10,10 +10,14 @@
 
 #include <chrono>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <string>
 #include <thread>
 #include <vector>
+
+#include <unistd.h>
 
 #include <modbus.h>
 #include <nlohmann/json.hpp>
@@ -213,6 +217,40 @@ jobs:
   EXPECT_GT(outside, 0);
   std::printf("%d cycles within the limits, %d outside (-9 on the PLC, 3 robots and the journal)\n", inside, outside);
   EXPECT_NE(log("vgrd.log").find("OFFSET_OUT_OF_LIMITS"), std::string::npos);
+}
+
+}  // namespace
+
+namespace {
+
+// vgr-sim-robot --program refuses a program that does not fit the cell's robot entry (it
+// would play a robot that moves somewhere else): exit 2 naming what disagrees. No sockets.
+TEST(robot_program, AProgramThatDisagreesWithTheCellIsRefused) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("vgr-robot-program-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  auto write = [&](const std::string& robots) {
+    std::string y = vgr::config::embeddedSimCellYaml();
+    y = replaceSection(y, "\nrobots:\n", "\njobs:\n", "\n" + robots);
+    std::ofstream(dir / "cell.yaml") << y;
+    return (dir / "cell.yaml").string();
+  };
+  auto run = [&](const std::string& cfg, const std::string& robot, const std::string& dialect, const std::string& program) {
+    return vgr::test::runCommand(vgr::test::binPath("vgr-sim-robot") + " --dialect " + dialect + " --port 1 --name " + robot +
+                                 " --config " + cfg + " --program " + vgr::test::sourcePath("examples/robot/" + program) + " 2>&1");
+  };
+  // The work object of VgrPick.mod is at (400, -200, 0) rz 90: a frame elsewhere is refused.
+  auto r = run(write("robots:\n  - {name: irb, dialect: abb, port: 50011, deliver: offset, frame: {name: wConveyor, x_mm: 400, "
+                     "y_mm: -150, rz_deg: 90}}\n"),
+               "irb", "abb", "VgrPick.mod");
+  EXPECT_EQ(r.exitCode, 2) << r.out;
+  EXPECT_NE(r.out.find("the program moves in work object wConveyor at (400.000, -200.000, 0.000) mm"), std::string::npos) << r.out;
+  // The programs apply offsets: an endpoint delivering poses is refused.
+  r = run(write("robots:\n  - {name: ur5, dialect: ur, port: 50010}\n"), "ur5", "ur", "vgr_offset.script");
+  EXPECT_EQ(r.exitCode, 2) << r.out;
+  EXPECT_NE(r.out.find("must have `deliver: offset`"), std::string::npos) << r.out;
+  std::error_code ec;
+  fs::remove_all(dir, ec);
 }
 
 }  // namespace
