@@ -47,7 +47,7 @@ WarmSize warmUpSize(const config::CellConfig& cell, const vision::calib::PixelMa
 }  // namespace
 
 CycleRunner::CycleRunner(const config::CellConfig& cell, drivers::CameraWorker& camera, CycleSinks sinks)
-    : cell_(cell), camera_(camera), sinks_(std::move(sinks)) {
+    : cell_(cell), camera_(camera), sinks_(std::move(sinks)), defaultJob_(cell.jobs.empty() ? 0 : cell.jobs.front().id) {
   auto m = makeCellMapping(cell);
   if (m) {
     mapping_ = std::move(*m);
@@ -121,6 +121,13 @@ void CycleRunner::stop() {
   if (thread_.joinable()) thread_.join();
 }
 
+Result<void> CycleRunner::setDefaultJob(int jobId) {
+  if (cell_.findJob(jobId) == nullptr) return fail(Status::JobNotFound, fmt::format("job {} is not configured", jobId));
+  const int before = defaultJob_.exchange(jobId);
+  if (before != jobId) log::info("cycle", "default job {} -> {} (JOB_ID 0, the operator's trigger)", before, jobId);
+  return {};
+}
+
 std::chrono::milliseconds CycleRunner::stallLimit() const {
   return milliseconds(cell_.cycleDeadlineMs) + milliseconds(2000);
 }
@@ -133,8 +140,9 @@ void CycleRunner::setFirstCycleId(std::uint32_t id) {
 }
 
 std::uint32_t CycleRunner::submit(int jobId, TriggerSource source) {
-  // JOB_ID 0 (a PLC that never wrote HR1) runs the cell's first job.
-  if (jobId == 0 && !cell_.jobs.empty()) jobId = cell_.jobs.front().id;
+  // JOB_ID 0 (a PLC that never wrote HR1, SIGUSR1, the page's trigger) runs the default job:
+  // the cell's first, or the one the operator switched to (setDefaultJob).
+  if (jobId == 0) jobId = defaultJob_.load();
   std::uint32_t id;
   {
     std::lock_guard lock(mutex_);
@@ -170,17 +178,18 @@ void CycleRunner::run() {
         r.status = Status::Internal;
         r.triggerTime = t.wallAt;
         lock.unlock();
-        if (sinks_.onResult) sinks_.onResult(r);
+        if (sinks_.onResult) sinks_.onResult(r, cv::Mat());
         continue;
       }
     }
     if (sinks_.onStarted) sinks_.onStarted(t.cycleId, t.jobId);
-    const CycleResult r = runCycle(t);
-    if (sinks_.onResult) sinks_.onResult(r);
+    cv::Mat image;
+    CycleResult r = runCycle(t, image);
+    if (sinks_.onResult) sinks_.onResult(r, image);
   }
 }
 
-CycleResult CycleRunner::runCycle(const Trigger& t) {
+CycleResult CycleRunner::runCycle(const Trigger& t, cv::Mat& shown) {
   CycleResult r;
   r.cycleId = t.cycleId;
   r.jobId = t.jobId;
@@ -221,6 +230,7 @@ CycleResult CycleRunner::runCycle(const Trigger& t) {
     vision::toGray8(wide, frame_.bitDepth, gray8);
     image = gray8;
   }
+  shown = image;
   if (drift_) {
     drift_->measure(image, *mapping_, r);
     if (r.driftAlarm && cell_.calibration.drift.refuse)

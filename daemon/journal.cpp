@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/log.hpp"
+#include "daemon/image_archive.hpp"
 
 namespace vgr::daemon {
 
@@ -157,6 +158,7 @@ std::string Journal::toJson(const CycleResult& r, const std::vector<JournalRobot
     j["drift_mm"] = std::isfinite(r.driftMm) ? nlohmann::json(round3(r.driftMm)) : nlohmann::json(nullptr);
     j["drift_alarm"] = r.driftAlarm;
   }
+  if (r.archived) j["archive"] = archiveStem(r.cycleId, r.triggerTime) + ".png";
   return j.dump();
 }
 

@@ -3,6 +3,7 @@
 #include <systemd/sd-daemon.h>
 
 #include <cmath>
+#include <filesystem>
 #include <cstdlib>
 #include <set>
 #include <vector>
@@ -11,9 +12,11 @@
 #include <boost/asio/post.hpp>
 #include <boost/asio/signal_set.hpp>
 #include <boost/asio/steady_timer.hpp>
+#include <opencv2/core.hpp>
 
 #include "core/log.hpp"
 #include "daemon/cycle_runner.hpp"
+#include "daemon/image_archive.hpp"
 #include "daemon/journal.hpp"
 #include "daemon/metrics.hpp"
 #include "daemon/plc_links.hpp"
@@ -44,7 +47,8 @@ struct VgrdApp::Impl {
   // The PLC side: the Modbus server and/or client mode, behind one interface.
   std::vector<std::unique_ptr<protocol::PlcLink>> plcs;
   std::vector<std::unique_ptr<protocol::RobotServer>> robots;
-  std::unique_ptr<Plant> plant;  // metrics + web server (daemon/plant.hpp)
+  std::unique_ptr<Plant> plant;  // metrics + web server + page (daemon/plant.hpp)
+  std::unique_ptr<ImageArchive> archive;  // when the config has an `archive` section
   bool notifiedReady = false;
   std::uint64_t watchdogUsec = 0;  // systemd's WatchdogSec in µs; 0 = not asked for pings
   Watchdog watchdog;               // every long-lived thread's heartbeat (daemon/watchdog.hpp)
@@ -52,16 +56,19 @@ struct VgrdApp::Impl {
 
   explicit Impl(config::CellConfig c) : cfg(std::move(c)) {}
 
-  void publish(const CycleResult& r) {
-    // Cycle thread. PLC first (one lock inside each link), then robots (posted to the I/O
-    // thread), then the journal (disk) last. A PLC gets the results of the cycles it
-    // triggered (a robot's or the operator's cycle would raise RESULT_VALID for a trigger
-    // the PLC never sent); robots and the journal get every result.
+  void publish(CycleResult& r, const cv::Mat& image) {
+    // Cycle thread. PLC first (one lock inside each link), then the frame's copies (archive,
+    // web page: a memcpy each, no encoding here), then robots (posted to the I/O thread),
+    // then the journal (disk) last. A PLC gets the results of the cycles it triggered (a
+    // robot's or the operator's cycle would raise RESULT_VALID for a trigger the PLC never
+    // sent); robots and the journal get every result.
     plant->cycleDone(r);  // metrics first (atomic adds): a scrape after RESULT_VALID sees this cycle
     if (r.trigger == TriggerSource::Modbus && !plcs.empty()) {
       const protocol::ModbusResult m = protocol::modbusResultFrom(r);
       for (auto& plc : plcs) plc->publishResult(m);
     }
+    if (archive) r.archived = archive->offer(r, image);
+    plant->frameDone(r, image);
     asio::post(io, [this, r] { results->onResult(r); });
     journal.append(r);
     plant->resultDelivered(r);  // MQTT (the JSON payload costs the cycle thread ~tens of µs): after the PLC
@@ -148,6 +155,11 @@ struct VgrdApp::Impl {
               "{} abandoned; packets missing {}, resent {}; underruns {}; trigger overruns {}; journal write errors {}",
               c.completed, c.failed, c.timeouts, c.incomplete, c.retries, c.recovered, c.reconnects, c.abandoned,
               c.missingPackets, c.resentPackets, c.underruns, cycles->overruns(), journal.writeErrors());
+    if (archive) {
+      const ArchiveCounters a = archive->counters();
+      log::info("main", "archive: {} frames ({:.1f} of {:.1f} MB), {} written, {} dropped (queue full), {} deleted (quota), "
+                "{} write errors", a.files, a.bytes / 1e6, a.quotaBytes / 1e6, a.written, a.dropped, a.deleted, a.writeErrors);
+    }
     statsTimer.expires_after(std::chrono::seconds(60));
     statsTimer.async_wait([this](const boost::system::error_code& ec) {
       if (!ec) logStats();
@@ -161,6 +173,7 @@ VgrdApp::~VgrdApp() {
   // Order: stop producers of work before what they feed.
   for (auto& plc : impl_->plcs) plc->stop();
   if (impl_->cycles) impl_->cycles->stop();
+  if (impl_->archive) impl_->archive->stop();  // writes what is queued
   if (impl_->camera) impl_->camera->stop();
   for (auto& r : impl_->robots) r->stop();
   if (impl_->plant) impl_->plant->stop();
@@ -196,7 +209,7 @@ Result<void> VgrdApp::start() {
 
   CycleSinks sinks;
   sinks.onStarted = [&s](std::uint32_t id, int job) { asio::post(s.io, [&s, id, job] { s.results->onCycleStarted(id, job); }); };
-  sinks.onResult = [&s](const CycleResult& r) { s.publish(r); };
+  sinks.onResult = [&s](CycleResult& r, const cv::Mat& image) { s.publish(r, image); };
   s.cycles = std::make_unique<CycleRunner>(s.cfg, *s.camera, std::move(sinks));
   // Cycle ids continue after the journal's last one (unique in the journal, no RESULT_ID
   // repeated to the PLC after a restart).
@@ -245,7 +258,24 @@ Result<void> VgrdApp::start() {
     s.plcs.push_back(std::move(plc));
   }
 
-  PlantSources sources{s.camera.get(), s.cycles.get(), {}, [&s] { return s.notifiedReady; }};
+  if (s.cfg.archive.enabled) {
+    const std::string dir = s.cfg.archive.dir.empty()
+                                ? (std::filesystem::path(s.cfg.journalPath).parent_path() / "archive").string()
+                                : s.cfg.archive.dir;
+    s.archive = std::make_unique<ImageArchive>(s.cfg.archive, dir);
+    if (auto r = s.archive->start(); !r) return r;
+  }
+
+  PlantSources sources;
+  sources.camera = s.camera.get();
+  sources.cycles = s.cycles.get();
+  sources.ready = [&s] { return s.notifiedReady; };
+  sources.archive = s.archive.get();
+  sources.trigger = [&s](int jobId) {
+    return s.plant->triggered(TriggerSource::Operator, s.cycles->submit(jobId, TriggerSource::Operator));
+  };
+  sources.setDefaultJob = [&s](int jobId) { return s.cycles->setDefaultJob(jobId); };
+  sources.defaultJob = [&s] { return s.cycles->defaultJob(); };
   for (const auto& r : s.robots) sources.robots.push_back(r.get());
   if (auto r = s.plant->start(std::move(sources)); !r) return r;
 

@@ -39,6 +39,7 @@ int main(int argc, char** argv) {
   double loss = 0.0, fps = 25.0;
   bool still = false;
   std::string shift;
+  int emptyEvery = 0;
   app.add_option("--config", configPath, "cell config whose camera and sim sections to serve (default: the embedded sim-cell.yaml)");
   app.add_option("--address", address, "IPv4 address to serve on (default: the config's camera.address)");
   app.add_option("--serial", serial, "serial number (default: the config's sim.serial)");
@@ -53,6 +54,8 @@ int main(int argc, char** argv) {
   app.add_option("--images", imagesFolder, "serve the images of this folder (name order, looping) instead of scenes");
   app.add_flag("--still", still, "every frame shows frame 1's scene (only the noise changes): sim.still");
   app.add_option("--camera-shift", shift, "X,Y[,Z[,RZ]]: render through a camera moved by this many mm (deg): sim.camera_shift");
+  app.add_option("--empty-every", emptyEvery, "every N-th frame shows the empty belt (no part): a cell where every N-th cycle fails")
+      ->check(CLI::Range(0, 1000000));
   app.add_option("--truth", truthPath, "append one JSON line of ground truth per served frame to this file (first camera)");
   if (const auto rc = vgr::cli::parse(app, argc, argv)) return *rc;
 
@@ -108,6 +111,7 @@ int main(int argc, char** argv) {
     o.lossRatio = loss;
     o.fps = fps;
     o.imagesFolder = imagesFolder;
+    o.emptyEvery = emptyEvery;
     if (i == 0) o.truthPath = truthPath;
     auto cell = *cfg;
     cell.sim.seed = cfg->sim.seed + i;

@@ -7,6 +7,7 @@
 //   vgr repeatability --config CELL --shots N   spread of a still part (docs/commissioning.md)
 //   vgr sim render | teach | locate | eval   localization datasets, jobs, runs (docs/localization.md)
 //   vgr classify train | eval   paper 002's part classifier (docs/classification.md)
+//   vgr replay --journal J --archive A --job DIR   a changed job on archived frames (docs/commissioning.md)
 #include <map>
 #include <memory>
 #include <string>
@@ -32,6 +33,7 @@
 #include "tools/vgr/grab.hpp"
 #include "tools/vgr/locate.hpp"
 #include "tools/vgr/repeatability.hpp"
+#include "tools/vgr/replay.hpp"
 #include "tools/vgr/sim_render.hpp"
 #include "tools/vgr/subcommand.hpp"
 #include "tools/vgr/teach.hpp"
@@ -81,6 +83,7 @@ int main(int argc, char** argv) {
       {nullptr, std::make_unique<tools::LocateCommand>()},
       {nullptr, std::make_unique<tools::EvalCommand>()},
       {nullptr, std::make_unique<tools::RepeatabilityCommand>()},
+      {nullptr, std::make_unique<tools::ReplayCommand>()},
       {"classify", std::make_unique<tools::ClassifyTrainCommand>()},
       {"classify", std::make_unique<tools::ClassifyEvalCommand>()},
   };
