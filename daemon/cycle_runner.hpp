@@ -72,6 +72,8 @@ class CycleRunner {
   std::uint32_t submit(int jobId, TriggerSource source);
 
   std::uint64_t overruns() const { return overruns_.load(); }
+  // The drift monitor (calibration.drift), null without one; its snapshot() is thread-safe.
+  const DriftMonitor* driftMonitor() const { return drift_.get(); }
 
   // The job a trigger with job 0 runs (Modbus JOB_ID 0, SIGUSR1, the page's trigger): the
   // cell's first job until the operator switches it (the page's "switch job"). Any thread.

@@ -13,6 +13,8 @@ namespace vgr::daemon {
 
 DriftMonitor::DriftMonitor(const config::CalibrationFilesConfig::Drift& cfg, const vision::calib::CheckFile::Fiducial& fiducial)
     : cfg_(cfg), fiducial_(fiducial) {
+  snap_.residualMm = std::numeric_limits<double>::quiet_NaN();
+  snap_.medianMm = std::numeric_limits<double>::quiet_NaN();
   search_.window = fiducial.window;
   search_.bright = fiducial.bright;
   search_.expectedAreaPx = fiducial.areaPx;
@@ -52,6 +54,7 @@ void DriftMonitor::measure(const cv::Mat& gray, const vision::calib::PixelMappin
 
   bool up = false;
   std::string why;
+  double median = std::numeric_limits<double>::quiet_NaN();
   if (missesInRow_ >= cfg_.window) {
     up = true;
     why = fmt::format("fiducial not seen in {} frames in a row ({})", missesInRow_,
@@ -60,7 +63,7 @@ void DriftMonitor::measure(const cv::Mat& gray, const vision::calib::PixelMappin
     scratch_.assign(ring_.begin(), ring_.begin() + static_cast<std::ptrdiff_t>(count_));
     const auto mid = scratch_.begin() + static_cast<std::ptrdiff_t>(count_ / 2);
     std::nth_element(scratch_.begin(), mid, scratch_.end());
-    double median = *mid;
+    median = *mid;
     if (count_ % 2 == 0) median = (median + *std::max_element(scratch_.begin(), mid)) / 2;
     if (median > cfg_.thresholdMm) {
       up = true;
@@ -72,10 +75,23 @@ void DriftMonitor::measure(const cv::Mat& gray, const vision::calib::PixelMappin
   } else if (!up && alarm_) {
     log::info("cycle", "calibration drift alarm cleared at cycle {} (was: {})", r.cycleId, reason_);
   }
+  const bool changed = up != alarm_ || (up && why != reason_);
   alarm_ = up;
   if (up) reason_ = std::move(why);
   else reason_.clear();
   r.driftAlarm = alarm_;
+  std::lock_guard lock(snapMutex_);
+  snap_.residualMm = r.driftMm;
+  snap_.medianMm = median;
+  snap_.alarm = alarm_;
+  if (changed) snap_.reason = reason_;  // a copy only when it changes
+  snap_.seen = seen_;
+  snap_.missed = missed_;
+}
+
+DriftMonitor::Snapshot DriftMonitor::snapshot() const {
+  std::lock_guard lock(snapMutex_);
+  return snap_;
 }
 
 }  // namespace vgr::daemon

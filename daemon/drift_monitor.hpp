@@ -13,11 +13,13 @@
 // CycleResult (journal `drift_mm`, `drift_alarm`; metrics vgr_calibration_drift_mm,
 // vgr_calibration_drift_alarm). With `on_alarm: refuse` the cycle runner answers -6
 // NOT_CALIBRATED while the alarm is up.
-// Thread: the cycle thread only (measure() is not reentrant). No allocation per frame
+// Thread: measure() on the cycle thread only (not reentrant); snapshot() from any thread
+// (a short lock; the page's status section, daemon/vgrd_app.cpp). No allocation per frame
 // beyond the fiducial search's few KB.
 #pragma once
 
 #include <cstdint>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -42,6 +44,17 @@ class DriftMonitor {
   void measure(const cv::Mat& gray, const vision::calib::PixelMapping& mapping, CycleResult& r);
 
   bool alarm() const { return alarm_; }
+
+  // The state after the last frame, for the commissioning page (any thread).
+  struct Snapshot {
+    double residualMm = 0;  // the last frame's residual; NaN when not seen (or no frame yet)
+    double medianMm = 0;    // median of the window; NaN before the first seen frame
+    bool alarm = false;
+    std::string reason;     // why the alarm is up; empty when down
+    std::uint64_t seen = 0, missed = 0;  // frames with and without the fiducial
+  };
+  Snapshot snapshot() const;
+  const config::CalibrationFilesConfig::Drift& config() const { return cfg_; }
   // Why the alarm is up ("median residual 0.512 mm over 5 frames above 0.3 mm", "fiducial
   // not seen in 5 frames in a row"); empty when it is down.
   const std::string& reason() const { return reason_; }
@@ -58,6 +71,8 @@ class DriftMonitor {
   std::uint64_t seen_ = 0, missed_ = 0;
   bool alarm_ = false;
   std::string reason_;
+  mutable std::mutex snapMutex_;  // guards snap_
+  Snapshot snap_;
 };
 
 }  // namespace vgr::daemon

@@ -15,7 +15,9 @@
 #include <opencv2/core.hpp>
 
 #include "core/log.hpp"
+#include "daemon/commissioning_status.hpp"
 #include "daemon/cycle_runner.hpp"
+#include "daemon/drift_monitor.hpp"
 #include "daemon/image_archive.hpp"
 #include "daemon/journal.hpp"
 #include "daemon/metrics.hpp"
@@ -277,6 +279,9 @@ Result<void> VgrdApp::start() {
   sources.setDefaultJob = [&s](int jobId) { return s.cycles->setDefaultJob(jobId); };
   sources.defaultJob = [&s] { return s.cycles->defaultJob(); };
   for (const auto& r : s.robots) sources.robots.push_back(r.get());
+  // The commissioning figures on the page (daemon/commissioning_status.hpp).
+  if (const DriftMonitor* drift = s.cycles->driftMonitor())
+    s.plant->addStatusSection("drift", [drift](nlohmann::json& out) { fillDriftSection(*drift, out); });
   if (auto r = s.plant->start(std::move(sources)); !r) return r;
 
   s.camera->start();

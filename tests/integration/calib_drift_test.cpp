@@ -155,6 +155,18 @@ TEST_F(calib_drift, KnockedCameraFailsVerifyAndRaisesTheDriftAlarm) {
   EXPECT_NE(log("vgrd.log").find("calibration drift ALARM"), std::string::npos) << log("vgrd.log");
   EXPECT_EQ(metric("vgr_calibration_drift_alarm"), 1);
   EXPECT_NEAR(metric("vgr_calibration_drift_mm"), 0.5, 0.1);
+  // The commissioning page's status carries the monitor's state and why the alarm is up.
+  const std::string reply = vgr::test::httpRequest(webPort_, "GET", "/api/status");
+  const auto body = reply.find("\r\n\r\n");
+  ASSERT_NE(body, std::string::npos) << reply;
+  const json status = json::parse(reply.substr(body + 4), nullptr, false);
+  ASSERT_TRUE(status.is_object());
+  const json& drift = status["sections"]["drift"];
+  EXPECT_TRUE(drift.value("alarm", false)) << status.dump();
+  EXPECT_NEAR(drift.value("median_mm", 0.0), 0.5, 0.1) << drift.dump();
+  EXPECT_EQ(drift.value("frames_seen", 0), 10) << drift.dump();
+  EXPECT_EQ(drift.value("on_alarm", ""), "warn");
+  EXPECT_NE(drift.value("reason", "").find("median residual"), std::string::npos) << drift.dump();
   vgrd_.reset();
 
   // on_alarm: refuse: once the alarm is up, every cycle answers -6 NOT_CALIBRATED.
