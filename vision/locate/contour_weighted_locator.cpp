@@ -245,11 +245,9 @@ class ContourWeightedLocator final : public Locator {
         // No texture to match (or the ORB pose did not pass eq. 7): the gradient search's pose.
         f.pairs.clear();
         f.candidates = 0;
-        if (auto init = gradientInitialPose(img, contours[c]); init) {
-          auto fromGradient = *init;
-          if (!fromGradient) return std::unexpected(fromGradient.error());
-          ok = fromGradient->has_value() && refine(**fromGradient, contours[c], f.d);
-        }
+        auto init = gradientInitialPose(img, contours[c]);
+        if (!init) return std::unexpected(init.error());
+        ok = init->has_value() && refine(**init, contours[c], f.d);
       }
       if (!ok) continue;
       f.d.u += roi.x;
@@ -279,18 +277,18 @@ class ContourWeightedLocator final : public Locator {
 
   // The initial pose from the gradient-direction search (the shape matcher, run once per image
   // on the ROI; its regions let the grasp point follow its own height): the best of its parts
-  // whose grasp point lies on the candidate. nullopt outside: no such part. An Error only
-  // when the search itself failed.
-  std::optional<Result<std::optional<Initial>>> gradientInitialPose(const cv::Mat& img, const std::vector<cv::Point>& contour) {
+  // whose grasp point lies on the candidate; nullopt when none does. An Error only when the
+  // search itself failed.
+  Result<std::optional<Initial>> gradientInitialPose(const cv::Mat& img, const std::vector<cv::Point>& contour) {
     if (!initials_) {
       auto out = gradient_->locate(img);
-      if (!out) return Result<std::optional<Initial>>(std::unexpected(out.error()));
+      if (!out) return std::unexpected(out.error());
       initials_ = std::move(out->parts);
     }
     for (const Detection& g : *initials_)  // best score first
       if (cv::pointPolygonTest(contour, cv::Point2f(static_cast<float>(g.u), static_cast<float>(g.v)), true) >= -2.0)
-        return Result<std::optional<Initial>>(Initial{g.angleDeg, {g.u, g.v}});
-    return Result<std::optional<Initial>>(std::optional<Initial>{});
+        return std::optional<Initial>(Initial{g.angleDeg, {g.u, g.v}});
+    return std::optional<Initial>{};
   }
 
   // theta_init, d_init from ORB matches in one candidate (section III.A); nullopt when there
