@@ -268,11 +268,17 @@ void parseRobot(Section s, RobotConfig& r) {
   }
 
   std::string order = "best_score";
-  s.read<std::string>("part_order", order, oneOf({"best_score", "by_label", "label_only"}),
-                      "one of: best_score, by_label, label_only");
-  r.partOrder = order == "best_score" ? PartOrder::BestScore : order == "by_label" ? PartOrder::ByLabel : PartOrder::LabelOnly;
+  s.read<std::string>("part_order", order, oneOf({"best_score", "by_label", "label_only", "random"}),
+                      "one of: best_score, by_label, label_only, random");
+  r.partOrder = order == "best_score" ? PartOrder::BestScore
+                : order == "by_label" ? PartOrder::ByLabel
+                : order == "random"   ? PartOrder::Random
+                                      : PartOrder::LabelOnly;
   s.read<int>("label", r.label, inRange(0, 32767), "[0, 32767]");
   if (r.partOrder == PartOrder::LabelOnly && !s.get("label")) s.fail(s.node(), "label", "part_order label_only needs a label");
+  s.read<bool>("reply_label", r.replyLabel);
+  if (r.replyLabel && r.dialect == Dialect::Strict)
+    s.fail(s.get("reply_label"), "reply_label", "the strict dialect's pose frame has no room for a label (paper 002's six values)");
 
   std::string deliver = "pose";
   s.read<std::string>("deliver", deliver, oneOf({"pose", "offset"}), "one of: pose, offset");
@@ -414,6 +420,14 @@ void parseSim(Section s, SimConfig& c) {
     f.read<double>("y_mm", c.fiducialYMm, inRange(-1e6, 1e6), "[-1000000, 1000000]");
     f.read<double>("diameter_mm", c.fiducialDiameterMm, inRange(2.0, 100.0), "[2, 100]");
     f.finish();
+  }
+  if (const YAML::Node cls = s.get("classes"); cls && !cls.IsNull()) {
+    if (!cls.IsSequence()) s.fail(cls, "classes", "expected a list of part class names");
+    for (std::size_t i = 0; i < cls.size(); ++i) {
+      if (!cls[i].IsScalar() || cls[i].Scalar().empty()) s.fail(cls[i], "classes", "expected a part class name");
+      c.classes.push_back(cls[i].Scalar());
+    }
+    if (!c.classes.empty() && c.scene != "part") s.fail(cls, "classes", "needs scene: part");
   }
   s.finish();
 }

@@ -27,6 +27,8 @@ enum class PartOrder {
   BestScore,  // "best_score": highest score first (the locator's order)
   ByLabel,    // "by_label": ascending label, best score first within a label
   LabelOnly,  // "label_only": only parts with RobotConfig::label, best score first
+  Random,     // "random": the parts of an image in a random order (paper 002's random selection;
+              // a permutation drawn from the cycle id, so a robot asking again gets the same)
 };
 
 enum class TriggerMode { Software, Hardware, FreeRun };
@@ -130,6 +132,11 @@ struct RobotConfig {
   int idleTimeoutMs = 0;       // ms, [0, 86400000]: a connection without a request is closed; 0 = never
   PartOrder partOrder = PartOrder::BestScore;
   int label = 0;               // [0, 32767]: the one label served with part_order label_only
+  // The part's label and its confidence in every reply (protocol/robot_codec.hpp formatReply
+  // withLabel): ur 10 values, abb +2 fields (<= 80 chars), fanuc 85 bytes, binary 48 bytes.
+  // Default false: replies exactly as before, for robot programs that read a fixed count.
+  // Not for strict (its pose frame is the six values the robot moves to).
+  bool replyLabel = false;
   StrictConfig strict;         // dialect strict only
   // What the robot program expects (docs/protocols.md, "Offsets and frames";
   // protocol/robot_frames.hpp): `deliver: pose` the part's pose in the user frame,
@@ -191,6 +198,11 @@ struct SimConfig {
   double shiftXMm = 0, shiftYMm = 0, shiftZMm = 0, shiftRzDeg = 0;  // camera_shift: mm, deg
   double fiducialXMm = 0, fiducialYMm = 0;  // fiducial: centre on the plane, base frame, mm
   double fiducialDiameterMm = 0;            // mm, 0 = no fiducial, else [2, 100]
+  // part: several part classes mixed in every frame (sim/part_scene.hpp PartModel::byName
+  // names, e.g. [ring, square, rect_notch]); a part's truth then carries `label`, its 1-based
+  // index in this list (the label a classifier trained on these classes gives it). Empty =
+  // the scene's one part. Names are checked by the renderer (vgr-sim-camera, vgr demo).
+  std::vector<std::string> classes;
 };
 
 // Calibration files (docs/calibration.md) vgrd maps pixels with instead of `model`. Paths

@@ -29,6 +29,7 @@ struct PartResult {
   double angleImgDeg = 0;  // part rotation in the image, degrees, counter-clockwise as displayed
   double score = 0;        // 0..1
   int label = 0;           // part class (paper 002's labels); 0 when the method does not classify
+  double confidence = 0;   // [0, 1]: the classifier's confidence in `label`; 0 without a classifier
 };
 
 // A part found but outside its job's limits (core/pose_limits.hpp): journalled, never

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <random>
 
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/post.hpp>
@@ -68,6 +69,12 @@ std::vector<protocol::RobotReply> ResultStore::replies(const CycleResult& r, con
   }
   if (policy.order == PartOrder::ByLabel)
     std::stable_sort(parts.begin(), parts.end(), [](const PartResult* a, const PartResult* b) { return a->label < b->label; });
+  if (policy.order == PartOrder::Random) {
+    // Paper 002's random selection: any of the parts first. Drawn from the cycle id, so that
+    // every call for one result (this function runs on each GET) gives the same order.
+    std::mt19937 rng(r.cycleId * 2654435761u + 12345u);
+    std::shuffle(parts.begin(), parts.end(), rng);
+  }
   if (parts.empty()) {
     base.status = Status::NoPartFound;
     out.push_back(base);
@@ -76,6 +83,8 @@ std::vector<protocol::RobotReply> ResultStore::replies(const CycleResult& r, con
   for (const PartResult* p : parts) {
     protocol::RobotReply reply = base;
     reply.pose = protocol::deliveredPose(delivery.dialect, delivery.frame, r.reference, p->pose);
+    reply.label = p->label;
+    reply.confidence = p->confidence;
     out.push_back(reply);
   }
   return out;

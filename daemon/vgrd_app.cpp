@@ -224,6 +224,7 @@ Result<void> VgrdApp::start() {
     protocol::RobotEndpoint ep;
     ep.name = rc.name;
     ep.dialect = rc.dialect;
+    ep.replyLabel = rc.replyLabel;
     ep.bind = rc.bind;
     ep.port = rc.port;
     ep.maxClients = static_cast<std::size_t>(rc.maxClients);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <stdexcept>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
@@ -241,12 +242,13 @@ PartSceneRenderer::Sheets PartSceneRenderer::makeSheets(const PartModel& part) c
       for (int i = 0; i < n; ++i) {
         const double x = (i + 0.5) / sheet->scale - sheet->half, y = sheet->half - (j + 0.5) / sheet->scale;
         const double arc = std::sin(2 * M_PI * std::hypot(x + 160, y - 40) / 1.6);
-        row[i] = static_cast<float>(layer.gray + 3 * arc + sp[i]);
+        row[i] = options_.plainFaces ? static_cast<float>(layer.gray) : static_cast<float>(layer.gray + 3 * arc + sp[i]);
       }
     }
     tex.convertTo(sheet->tex, CV_8UC1);
     std::vector<std::vector<cv::Point>> marks, holes;
-    for (const auto& p : layer.marks) marks.push_back(toSheet(p, sheet->scale, sheet->half));
+    if (!options_.plainFaces)
+      for (const auto& p : layer.marks) marks.push_back(toSheet(p, sheet->scale, sheet->half));
     for (const auto& p : layer.holes) holes.push_back(toSheet(p, sheet->scale, sheet->half));
     if (!marks.empty()) cv::fillPoly(sheet->tex, marks, cv::Scalar(std::max(0, layer.gray - 110)), cv::LINE_AA, 4);
     if (!holes.empty()) cv::fillPoly(sheet->tex, holes, cv::Scalar(options_.background), cv::LINE_AA, 4);
@@ -282,6 +284,15 @@ PartSceneRenderer PartSceneRenderer::fromCellConfig(const config::CellConfig& c)
   o.fiducialXMm = c.sim.fiducialXMm;
   o.fiducialYMm = c.sim.fiducialYMm;
   o.fiducialDiameterMm = c.sim.fiducialDiameterMm;
+  if (!c.sim.classes.empty()) {
+    std::vector<PartModel> models;
+    for (const auto& name : c.sim.classes) {
+      auto model = PartModel::byName(name);
+      if (!model) throw std::invalid_argument("sim.classes: " + model.error().message);
+      models.push_back(std::move(*model));
+    }
+    return PartSceneRenderer(std::move(models), o);
+  }
   return PartSceneRenderer(c.sim.scene == "multi" ? PartModel::multi(c.sim.levels) : PartModel::flat(), o);
 }
 

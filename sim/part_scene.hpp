@@ -96,6 +96,11 @@ struct PartSceneOptions {
   double shiftXMm = 0, shiftYMm = 0, shiftZMm = 0, shiftRzDeg = 0;
   double fiducialXMm = 0, fiducialYMm = 0, fiducialDiameterMm = 0;
   std::uint8_t fiducialGray = 230;
+  // Texture-less parts (`vgr sim render --plain`): every top face one uniform gray, without
+  // the machining grain and without printed or engraved marks; through holes, walls, image
+  // noise, blur, lighting and clutter stay. Plain machined parts: nothing for keypoint
+  // detectors but the outline's corners (issue 18, "methods that must not give up").
+  bool plainFaces = false;
 };
 
 // A part's pose on the conveyor and its truth in the image.
@@ -135,7 +140,8 @@ class PartSceneRenderer {
   // The textured scenes of a cell config's simulated camera (`sim.scene: part | multi`):
   // the config's `model` is the true camera (fx = fy assumed; heights and z are
   // then above plane_z_mm), `sim`
-  // the rest (size, noise, seed, levels, angle range, parts per image, clutter).
+  // the rest (size, noise, seed, levels, angle range, parts per image, clutter, classes).
+  // Throws std::invalid_argument for an unknown name in sim.classes.
   static PartSceneRenderer fromCellConfig(const config::CellConfig& cell);
 
   // Draws scene `index` (poses; deterministic in seed and index).
