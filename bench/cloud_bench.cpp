@@ -64,8 +64,15 @@ int main(int argc, char** argv) {
   app.add_option("--camera-tilt-max", scene.cameraTiltMaxDeg)->check(CLI::Range(0.0, 30.0));
   std::vector<double> roi;
   app.add_option("--roi", roi, "x_min,x_max,y_min,y_max,z_min,z_max (mm, camera frame)")->delimiter(',')->expected(6);
+  int width = 640;
+  app.add_option("--width", width, "image width, px (height 3/4 of it, focal 800 px x width / 640)")->check(CLI::Range(64, 4096));
   app.add_flag("--verbose", verbose, "one line per scene");
   CLI11_PARSE(app, argc, argv);
+  scene.camera.width = width;
+  scene.camera.height = width * 3 / 4;
+  scene.camera.fx = scene.camera.fy = 800.0 * width / 640;
+  scene.camera.cx = (scene.camera.width - 1) / 2.0;
+  scene.camera.cy = (scene.camera.height - 1) / 2.0;
   if (roi.size() == 6) p.roi = {roi[0], roi[1], roi[2], roi[3], roi[4], roi[5]};
   if (preset == "open3d") {
     // Open3D's global registration tutorial: RANSAC (100000, 0.999) on FPFH, one model.

@@ -7,6 +7,7 @@
 
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "vision/cloud/locator3d.hpp"
 
@@ -65,7 +66,10 @@ Visibility VisibilityCheck::check(const Eigen::Matrix4d& t, const cv::Mat& depth
     if (-n.dot(p) < cosMin * p.norm()) continue;  // back-facing or grazing
     const double u = k.fx * p.x() / p.z() + k.cx, v = k.fy * p.y() / p.z() + k.cy;
     const int ui = static_cast<int>(std::lround(u)), vi = static_cast<int>(std::lround(v));
-    if (ui < 0 || vi < 0 || ui >= w || vi >= h) continue;
+    if (ui < 0 || vi < 0 || ui >= w || vi >= h) {
+      ++out.outside;
+      continue;
+    }
     front_.emplace_back(ui, vi, p.z(), static_cast<double>(i));
     u0 = std::min(u0, ui), u1 = std::max(u1, ui), v0 = std::min(v0, vi), v1 = std::max(v1, vi);
   }
@@ -88,7 +92,8 @@ Visibility VisibilityCheck::check(const Eigen::Matrix4d& t, const cv::Mat& depth
     const int ui = static_cast<int>(f[0]), vi = static_cast<int>(f[1]);
     const double z = f[2];
     if (zbuf_.at<float>(vi, ui) < z - selfTol) continue;  // hidden by the model itself
-    if (!claimed.empty() && claimed.at<std::uint8_t>(vi, ui)) {
+    const std::uint8_t mark = claimed.empty() ? kPixelFree : claimed.at<std::uint8_t>(vi, ui);
+    if (mark == kPixelClaimed) {
       ++out.unknown;  // another part found before explains this pixel
       continue;
     }
@@ -106,7 +111,8 @@ Visibility VisibilityCheck::check(const Eigen::Matrix4d& t, const cv::Mat& depth
         if (d <= z + tol) allBehind = false;
       }
     }
-    if (matched) ++out.matched;
+    if (matched && mark == kPixelPlane) ++out.unknown;  // the table: no evidence of a part
+    else if (matched) ++out.matched;
     else if (!anyValid) ++out.unknown;
     else if (allBehind) ++out.contradicted;
     else ++out.occluded;  // something nearer in the neighbourhood
@@ -116,6 +122,29 @@ Visibility VisibilityCheck::check(const Eigen::Matrix4d& t, const cv::Mat& depth
     out.fitness = static_cast<double>(out.matched) / n;
     out.contradiction = static_cast<double>(out.contradicted) / n;
   }
+  // The ring just outside the model's silhouette (kRingMm wide): where the measured surface
+  // there lies within tol of the nearest model z, the surface runs on past the part's edge.
+  double zSum = 0;
+  for (const auto& f : front_) zSum += f[2];
+  const int ring = std::max(2, static_cast<int>(std::lround(kRingMm * k.fx * static_cast<double>(front_.size()) / zSum)));
+  const cv::Rect outer = cv::Rect(u0 - ring, v0 - ring, box.width + 2 * ring, box.height + 2 * ring) & cv::Rect(0, 0, w, h);
+  ringIn_.create(outer.size(), CV_32FC1);
+  ringIn_.setTo(std::numeric_limits<float>::infinity());
+  zbuf_(box).copyTo(ringIn_(box - outer.tl()));
+  cv::erode(ringIn_, ringNear_, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * ring + 1, 2 * ring + 1)));  // min filter
+  int ringValid = 0, continued = 0;
+  for (int y = 0; y < outer.height; ++y) {
+    const float* in = ringIn_.ptr<float>(y);
+    const float* nearZ = ringNear_.ptr<float>(y);
+    const float* dr = depth.ptr<float>(outer.y + y) + outer.x;
+    for (int x = 0; x < outer.width; ++x) {
+      if (std::isfinite(in[x]) || !std::isfinite(nearZ[x]) || !(dr[x] > 0)) continue;
+      if (!claimed.empty() && claimed.at<std::uint8_t>(outer.y + y, outer.x + x) == kPixelClaimed) continue;
+      ++ringValid;
+      if (std::abs(dr[x] - nearZ[x]) <= tol) ++continued;
+    }
+  }
+  out.continuation = ringValid > 0 ? static_cast<double>(continued) / ringValid : 0;
   return out;
 }
 
@@ -167,7 +196,7 @@ Eigen::Matrix4d VisibilityCheck::alignToBoundaries(const Eigen::Matrix4d& start,
     for (std::size_t i : sel) {
       const Eigen::Vector3d p = r * points_[i] + tr;
       const int u = static_cast<int>(std::lround(k.fx * p.x() / p.z() + k.cx)), v = static_cast<int>(std::lround(k.fy * p.y() / p.z() + k.cy));
-      if (u < 0 || v < 0 || u >= w || v >= h || (!claimed.empty() && claimed.at<std::uint8_t>(v, u))) {
+      if (u < 0 || v < 0 || u >= w || v >= h || (!claimed.empty() && claimed.at<std::uint8_t>(v, u) == kPixelClaimed)) {
         e += 0.25;
         continue;
       }
@@ -247,7 +276,7 @@ void VisibilityCheck::claim(const Eigen::Matrix4d& t, const cv::Mat& depth, cons
     for (int y = std::max(0, vi - rad); y <= std::min(depth.rows - 1, vi + rad); ++y)
       for (int x = std::max(0, ui - rad); x <= std::min(depth.cols - 1, ui + rad); ++x) {
         const float d = depth.at<float>(y, x);
-        if (d > 0 && std::abs(d - p.z()) <= tol) claimed.at<std::uint8_t>(y, x) = 1;
+        if (d > 0 && std::abs(d - p.z()) <= tol) claimed.at<std::uint8_t>(y, x) = kPixelClaimed;
       }
   }
 }

@@ -4,6 +4,7 @@
 // translation errors. Units mm; camera frame x right, y down, z forward. Any thread.
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include <Eigen/Core>
@@ -33,10 +34,26 @@ std::vector<Eigen::Vector3d> backProject(const cv::Mat& depthMm, const DepthIntr
 // fitness = matched / (matched + occluded + contradicted): the share of what this viewpoint
 // should show of the part that it does show (paper 004's overlap, made independent of how
 // much of a part one view can see); contradiction = contradicted / the same.
+// continuation: of the valid pixels in a ring kRingMm wide just outside the model's
+// silhouette, the share whose measured z is within tolerance of the nearest model z: the
+// measured surface runs on past the part's edge. A real part's silhouette is a depth edge
+// (the background lies behind it, or an occluder in front); a model face laid into a larger
+// surface of the same depth (a bin's rim, a table outside the bin, a big clutter face, the
+// rest of the model hidden behind it) fits that surface 100 % but its edge is not there.
+inline constexpr double kRingMm = 4;
 struct Visibility {
-  double fitness = 0, contradiction = 0;
+  double fitness = 0, contradiction = 0, continuation = 0;
   int matched = 0, occluded = 0, contradicted = 0, unknown = 0;
+  int outside = 0;  // front-facing model points projected outside the image (before the self-hiding test)
 };
+// The `claimed` image of VisibilityCheck (CV_8UC1, image size): what a pixel already is.
+//   kPixelClaimed  a part found before explains it: unknown for every later check
+//   kPixelPlane    on the removed dominant plane (table, bin floor) or beyond it: a model
+//                  point matched there is unknown (a part's face lying in the table plane
+//                  with the rest of the part hidden "below" it would otherwise fit 100 %);
+//                  the sensor seeing the table through a model point still contradicts it
+inline constexpr std::uint8_t kPixelFree = 0, kPixelClaimed = 1, kPixelPlane = 2;
+
 class VisibilityCheck {
  public:
   // points / normals: the model (model frame, mm), spaced about spacingMm.
@@ -72,6 +89,7 @@ class VisibilityCheck {
   std::vector<Eigen::Vector3d> points_, normals_;
   double spacingMm_;
   cv::Mat zbuf_;  // scratch: the model's own z-buffer
+  cv::Mat ringIn_, ringNear_;  // scratch: the silhouette ring (check())
   std::vector<Eigen::Vector4d> front_;  // scratch: u, v, z, index of the front-facing points
   // Front-facing points in the image not hidden by the model itself (indices); fills front_, zbuf_.
   std::vector<std::size_t> visibleSet(const Eigen::Matrix4d& t, const cv::Mat& depthMm, const DepthIntrinsics& k, double maxAngleDeg);

@@ -38,12 +38,30 @@ using Points = backend::Points;
 constexpr double kModelFineMm = 1.5;     // visibility model spacing
 // FPFH neighbours: Open3D's tutorial caps them at 100, which at a 3 mm voxel cuts a 30 mm
 // radius to ~17 mm; 500 keeps the radius (measured: right matches 9 % -> 18 %).
-const int kFpfhMaxNeighbours = std::getenv("VGR_MAXNN") ? std::atoi(std::getenv("VGR_MAXNN")) : 500;
+constexpr int kFpfhMaxNeighbours = 500;
 constexpr double kModelIcpMm = 1.0;      // ICP target spacing
 constexpr double kNormalAngleDeg = 30;   // ICP pairs: normals at most this far apart
 constexpr double kCropNormalRadiusMm = 3;  // normals of the measured points near a candidate
 constexpr double kPaperEdgeSimilarity = 0.9;  // Open3D's tutorial value (the paper's pipeline)
 constexpr double kContradictionWeight = 2;    // hypothesis score: matched - 2 x seen-through
+// Evidence: a candidate counts only if the view should show at least this share of the
+// fewest model points any viewpoint sees (the minimum over 64 directions: bracket 324,
+// housing 321, lever 289 at 1.5 mm spacing). Points outside the image count as unseen, so a
+// pose mostly outside the image, or one that shows the camera only a thin side, cannot win
+// on a fitness that is a share of almost nothing.
+constexpr double kMinViewShare = 0.5;
+// A candidate whose silhouette ring (cloud_math.hpp Visibility::continuation) continues the
+// measured surface at more than this share is not a part there (measured on 5 bracket scenes:
+// the false poses 214-298 mm off had fitness 0.95-1.0; see docs/3d.md).
+constexpr double kMaxContinuation = 0.5;
+// A part must lie in the image: at most this share of its camera-facing points may project
+// outside it (the view cannot confirm what it does not see).
+constexpr double kMaxOutsideShare = 0.1;
+// ... and at most this share may fall on pixels without data: the bin's walls, seen at
+// grazing angles, are mostly invalid pixels, and a model laid across them matched the few
+// valid ones (measured at 320 x 240: housing scene 2, a pose 264 mm off with fitness 0.99
+// and 621 unknown of 918 points; true poses have 0-2 % unknown).
+constexpr double kMaxUnknownShare = 0.25;
 
 struct Candidate {
   Eigen::Matrix4d camFromModel = Eigen::Matrix4d::Identity();
@@ -86,6 +104,12 @@ class Locator3dImpl final : public Locator3d {
     centroid_ = c / static_cast<double>(modelFine_.size());
     for (const auto& q : modelFine_.points()) radius_ = std::max(radius_, (q - centroid_).norm());
     visibility_ = VisibilityCheck(modelFine_.points(), modelFine_.normals(), kModelFineMm);
+    {
+      std::vector<std::size_t> counts;
+      for (const auto& d : sphereDirections(64))
+        counts.push_back(visibleFrom(modelFine_.points(), modelFine_.normals(), d, kModelFineMm, p.visibleMaxAngleDeg).size());
+      minSeen_ = static_cast<int>(std::lround(kMinViewShare * static_cast<double>(*std::min_element(counts.begin(), counts.end()))));
+    }
     if (p.modelViews > 0) {
       // FPFH of what each viewpoint sees: the views' points pooled, each remembering which
       // model point it is.
@@ -138,7 +162,8 @@ class Locator3dImpl final : public Locator3d {
     const double v = params_.voxelMm;
     // The current view P_a in the camera frame, without the table / bin floor.
     Points scene = backProject(depth, k, params_.roi);
-    if (params_.removePlane) removeDominantPlane(scene);
+    claimed_ = cv::Mat::zeros(depth.size(), CV_8UC1);
+    if (params_.removePlane) removeDominantPlane(scene, depth, k);
     PointSet all(std::move(scene));
     PointSet sceneDown = all.voxelDown(v);
     out.scenePoints = static_cast<int>(sceneDown.size());
@@ -149,14 +174,12 @@ class Locator3dImpl final : public Locator3d {
     sceneDown.estimateNormals(2 * v, 30, Eigen::Vector3d::Zero());  // the camera is at the origin
     sceneDown.computeFpfh(params_.featureRadiusMm, kFpfhMaxNeighbours);
     Points remaining = all.points();
-    claimed_ = cv::Mat::zeros(depth.size(), CV_8UC1);
 
     // Correspondences: each scene point's nearest model feature (paper 004 Sec. 3.2 step 2).
     std::vector<Eigen::Vector2i> sceneToModel;
     std::unique_ptr<backend::CorrespondenceSampler> sampler;
     if (featureIndex_) {
-      static const int knn = std::getenv("VGR_KNN") ? std::atoi(std::getenv("VGR_KNN")) : 1;
-      for (const auto& m : featureIndex_->match(sceneDown, {}, knn))
+      for (const auto& m : featureIndex_->match(sceneDown, {}, 1))
         sceneToModel.emplace_back(m[0], poolOwner_[static_cast<std::size_t>(m[1])]);
       sampler = std::make_unique<backend::CorrespondenceSampler>(sceneDown, sceneToModel, 2 * radius_);
     }
@@ -229,8 +252,10 @@ class Locator3dImpl final : public Locator3d {
       if (std::sscanf(t, "%lf %lf %lf %lf %lf %lf %lf", &p.x, &p.y, &p.z, &p.qw, &p.qx, &p.qy, &p.qz) == 7)
         err = fmt::format(" err {:.2f} mm {:.2f} deg", translationErrorMm(c.camFromModel, toMatrix(p)), rotationErrorDeg(c.camFromModel, toMatrix(p)));
     }
-    std::fprintf(stderr, "  cand copy %d valid %d f %.3f c %.3f m %d o %d x %d u %d%s\n", c.copy, c.valid, c.vis.fitness, c.vis.contradiction,
+    std::fprintf(stderr, "  cand copy %d valid %d out %d cont %.2f f %.3f c %.3f m %d o %d x %d u %d%s\n", c.copy, c.valid, c.vis.outside, c.vis.continuation, c.vis.fitness, c.vis.contradiction,
                  c.vis.matched, c.vis.occluded, c.vis.contradicted, c.vis.unknown, err.c_str());
+    const Pose cp = toPose(c.camFromModel);
+    std::fprintf(stderr, "    at %.1f %.1f %.1f q %.3f %.3f %.3f %.3f\n", cp.x, cp.y, cp.z, cp.qw, cp.qx, cp.qy, cp.qz);
   }
 
   // Consistent candidates first, then by fitness.
@@ -241,8 +266,9 @@ class Locator3dImpl final : public Locator3d {
   }
 
   // Removes the dominant plane (table, bin floor) and everything beyond it, when it holds at
-  // least planeMinShare of the points (RANSAC on a sparse sample, then every point tested).
-  void removeDominantPlane(Points& pts) const {
+  // least planeMinShare of the points (RANSAC on a sparse sample, then every point tested),
+  // and marks its pixels kPixelPlane in claimed_.
+  void removeDominantPlane(Points& pts, const cv::Mat& depth, const DepthIntrinsics& k) {
     if (pts.size() < 100) return;
     Points sample;
     const std::size_t step = std::max<std::size_t>(1, pts.size() / 20000);
@@ -253,6 +279,16 @@ class Locator3dImpl final : public Locator3d {
     Eigen::Vector4d c = plane.coefficients;
     if (c[3] < 0) c = -c;  // the camera (origin) on the positive side
     std::erase_if(pts, [&](const Eigen::Vector3d& p) { return c.head<3>().dot(p) + c[3] < params_.planeDistanceMm; });
+    for (int v = 0; v < depth.rows; ++v) {
+      const float* zr = depth.ptr<float>(v);
+      std::uint8_t* mr = claimed_.ptr<std::uint8_t>(v);
+      for (int u = 0; u < depth.cols; ++u) {
+        const double z = zr[u];
+        if (!(z > 0)) continue;
+        const Eigen::Vector3d p((u - k.cx) * z / k.fx, (v - k.cy) * z / k.fy, z);
+        if (c.head<3>().dot(p) + c[3] < params_.planeDistanceMm) mr[u] = kPixelPlane;
+      }
+    }
   }
 
   // How well the depth image supports copy `copy` placed by t (copy -> camera): the model
@@ -269,15 +305,14 @@ class Locator3dImpl final : public Locator3d {
       const Eigen::Vector3d p = r * pts[i] + tr;
       if (p.z() <= 1 || -(r * nrm[i]).dot(p) < cosMin * p.norm()) continue;
       const int u = static_cast<int>(std::lround(k.fx * p.x() / p.z() + k.cx)), vv = static_cast<int>(std::lround(k.fy * p.y() / p.z() + k.cy));
-      if (u < 0 || vv < 0 || u >= depth.cols || vv >= depth.rows || claimed_.at<std::uint8_t>(vv, u)) continue;
+      if (u < 0 || vv < 0 || u >= depth.cols || vv >= depth.rows || claimed_.at<std::uint8_t>(vv, u) == kPixelClaimed) continue;
       const double d = depth.at<float>(vv, u);
       if (!(d > 0)) continue;
-      if (std::abs(d - p.z()) <= tol) ++matched;
+      if (std::abs(d - p.z()) <= tol) matched += claimed_.at<std::uint8_t>(vv, u) == kPixelFree;
       else if (d > p.z() + tol) ++through;
       else ++hidden;
     }
-    static const double hiddenWeight = std::getenv("VGR_HW") ? std::atof(std::getenv("VGR_HW")) : 1.0;
-    return matched - kContradictionWeight * through - hiddenWeight * hidden;
+    return matched - kContradictionWeight * through - hidden;
   }
 
   // RANSAC hypotheses for copy `copy`, as candidates (camFromModel, not yet refined).
@@ -291,8 +326,7 @@ class Locator3dImpl final : public Locator3d {
       s.distanceMm = params_.ransacDistanceMm;
       s.edgeSimilarity = params_.edgeSimilarity;
       s.keep = params_.hypothesesPerCopy;
-      static const int sampleSize = std::getenv("VGR_SS") ? std::atoi(std::getenv("VGR_SS")) : 3;
-      s.sampleSize = sampleSize;
+      s.sampleSize = 3;  // the paper's mu = 3
       s.seed = params_.seed * 7919u + static_cast<unsigned>(copy) * 104729u + static_cast<unsigned>(round) * 1299709u;
       const char* truthText = std::getenv("VGR_CLOUD_TRACE") ? std::getenv("VGR_CLOUD_TRUTH") : nullptr;
       Eigen::Matrix4d truth = Eigen::Matrix4d::Identity();
@@ -356,7 +390,15 @@ class Locator3dImpl final : public Locator3d {
       if (!icp(c.camFromModel, near, d, params_.icpIterations, c.rmseMm, &h)) return;
     alignToBoundaries(c.camFromModel, h, depth, k);
     c.vis = visibility_.check(c.camFromModel, depth, k, params_.fitnessDistanceMm, params_.visibleMaxAngleDeg, claimed_);
-    c.valid = true;
+    c.valid = enoughEvidence(c.vis);
+  }
+
+  // kMinViewShare: the view must be able to confirm or refute the pose.
+  // kMaxContinuation: the part's edge must be an edge in the view.
+  bool enoughEvidence(const Visibility& v) const {
+    const int seen = v.matched + v.occluded + v.contradicted;
+    return seen >= minSeen_ && v.continuation <= kMaxContinuation && v.outside <= kMaxOutsideShare * (seen + v.unknown + v.outside) &&
+           v.unknown <= kMaxUnknownShare * (seen + v.unknown);
   }
 
   Candidate refine(Candidate c, const Points& remaining, const cv::Mat& depth, const DepthIntrinsics& k) {
@@ -367,6 +409,7 @@ class Locator3dImpl final : public Locator3d {
     alignToBoundaries(c.camFromModel, h, depth, k);
     c.rmseMm = rmse;
     c.vis = visibility_.check(c.camFromModel, depth, k, params_.fitnessDistanceMm, params_.visibleMaxAngleDeg, claimed_);
+    c.valid = enoughEvidence(c.vis);
     return c;
   }
 
@@ -380,13 +423,12 @@ class Locator3dImpl final : public Locator3d {
     Eigen::Matrix<double, 6, 6> s = Eigen::Matrix<double, 6, 6>::Identity();
     s.topLeftCorner<3, 3>() /= radius_;
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eig(s * h * s);
-    static const double weight = std::getenv("VGR_SPRING") ? std::atof(std::getenv("VGR_SPRING")) : 1.0;
     const double sigma = 0.35;
     std::vector<Eigen::Matrix<double, 6, 1>> dirs;
     std::vector<double> stiff;
     for (int i = 0; i < 6; ++i) {
       dirs.push_back(eig.eigenvectors().col(i));
-      stiff.push_back(weight * std::max(0.0, eig.eigenvalues()[i]) / (sigma * sigma));
+      stiff.push_back(std::max(0.0, eig.eigenvalues()[i]) / (sigma * sigma));
     }
     camFromModel = visibility_.alignToBoundaries(camFromModel, centroid_, radius_, dirs, stiff, depth, k, params_.fitnessDistanceMm,
                                                  params_.visibleMaxAngleDeg, claimed_);
@@ -454,6 +496,7 @@ class Locator3dImpl final : public Locator3d {
   std::vector<Eigen::Matrix4d> copyRotations_;
   Eigen::Vector3d centroid_ = Eigen::Vector3d::Zero();
   double radius_ = 0;
+  int minSeen_ = 0;  // kMinViewShare x the median visible model points
   VisibilityCheck visibility_;
   cv::Mat claimed_;  // pixels of the parts found in the current call
 };
