@@ -114,6 +114,8 @@ CLI::App* SimRenderCommand::add(CLI::App& parent) {
                         ->check(CLI::Range(1.0, 10.0)));
   only2d_.push_back(c->add_option("--decoys", d.scene.decoys, "2D: pieces of the part's own faces lying on the belt, per image")
                         ->check(CLI::Range(0, 16)));
+  only2d_.push_back(c->add_flag("--plain", d.scene.plainFaces,
+                                "2D: texture-less parts: uniform top faces, no grain, no printed marks (holes, walls, noise, clutter stay)"));
   only2d_.push_back(c->add_option("--camera-height", d.scene.cameraHeightMm, "2D: camera above the conveyor, mm")
                         ->check(CLI::Range(100.0, 5000.0)));
   // 3D only.

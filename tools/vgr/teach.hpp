@@ -21,6 +21,9 @@ struct TeachOptions {
   // the grasp pose in the model frame as X,Y,Z,QW,QX,QY,QZ (mm, unit quaternion), default
   // the model frame. --image / --grasp and --model exclude each other.
   std::string model, graspPose;
+  // --polarity: params.polarity of moments, hu and shape (use | ignore_global | ignore_local);
+  // empty = the method's default (use). A --param polarity=... says the same; both: an error.
+  std::string polarity;
 };
 
 int runTeach(const TeachOptions& o);
