@@ -98,6 +98,11 @@ JobFile parse(const YAML::Node& root, const std::string& file, const std::string
   j.folder = folder;
   const int version = top.integer("version", 1, 1, 1);
   (void)version;
+  // `kind: 3d` jobs are read by config/job3d.hpp (and located by vision/cloud/).
+  if (const std::string kind = top.text("kind", "2d"); kind == "3d")
+    top.fail(top.get("kind"), "kind", "a 3D job: this reader is for 2D jobs (3D jobs: docs/3d.md)");
+  else if (kind != "2d")
+    top.fail(top.get("kind"), "kind", "expected 2d or 3d, got '" + kind + "'");
   j.name = top.text("name", "");
   j.method = top.text("method", j.method);
   if (j.method.empty()) top.fail(top.get("method"), "method", "must not be empty");
