@@ -109,7 +109,7 @@ std::string Journal::toJson(const CycleResult& r) {
                      {"rz_deg", round3(e.rz)}, {"ry_deg", round3(e.ry)}, {"rx_deg", round3(e.rx)},
                      {"dx_mm", round3(p.offset.x)}, {"dy_mm", round3(p.offset.y)}, {"drz_deg", round3(o.rz)},
                      {"u_px", round3(p.uPx)}, {"v_px", round3(p.vPx)}, {"angle_img_deg", round3(p.angleImgDeg)},
-                     {"score", round3(p.score)}, {"label", p.label}});
+                     {"scale", std::round(p.scale * 1e5) / 1e5}, {"score", round3(p.score)}, {"label", p.label}});
   }
   j["parts"] = std::move(parts);
   return j.dump();

@@ -14,6 +14,7 @@ struct TeachOptions {
   std::string image, out, method = "moments", roi, regionsFile, name;
   std::vector<std::string> grasps, params;
   double minScore = 0.5, angleMin = -180, angleMax = 180, partHeightMm = 0;
+  double scaleMin = 1, scaleMax = 1;  // image px per template px, [kMinPartScale, kMaxPartScale]
   int maxParts = 1;
   bool autoRegions = true;
 };
