@@ -27,6 +27,8 @@
 #include <vector>
 
 #include <CLI/CLI.hpp>
+
+#include "core/cli.hpp"
 #include <fmt/core.h>
 #include <opencv2/core.hpp>
 
@@ -68,6 +70,7 @@ double cpuNowMs() {
 
 int main(int argc, char** argv) {
   CLI::App app{"vgr-bench-locate: localization methods on the same rendered images"};
+  vgr::cli::showDefaults(app);
   int width = 2448, height = 2048, images = 100, clutter = 8, repeat = 1;
   double sigma = 5, range = 180, focal = 2400, camHeight = 800, templateAngle = 0, size = 450, illum = 2;
   double scaleMin = 1, scaleMax = 1, partScaleMin = 0, partScaleMax = 0, perspective = 0;
@@ -105,7 +108,7 @@ int main(int argc, char** argv) {
   app.add_option("--template-angle", templateAngle, "sim: deg, the part in the template image (CCW as displayed)");
   app.add_option("--methods", methods, "methods to run (default: all of locatorMethods())");
   app.add_option("--param", params, "method parameter NAME=VALUE (every method gets it)");
-  CLI11_PARSE(app, argc, argv);
+  if (const auto rc = vgr::cli::parse(app, argc, argv)) return *rc;
   if (methods.empty()) methods = vgr::vision::locatorMethods();
   if (scaleMax < scaleMin) {
     std::fprintf(stderr, "--scale-max must not be below --scale-min\n");
