@@ -2,7 +2,8 @@
 // the textured part of sim/synth_part.hpp, taught at scale 1 and seen at 0.7 and 1.4 times
 // that (the template warped by a similarity onto the belt, noise sigma 5), is found by
 // orb-ransac and orb-adk searching 0.6-1.5 with its scale reported; a fixed-scale job (the
-// default, which accepts 1 / 1.25 to 1.25) finds no part at 0.7.
+// default, which accepts 1 / 1.25 to 1.25) finds no part at 0.7 and reports a part at scale 1
+// at exactly its scale 1.
 #include <cmath>
 #include <numbers>
 
@@ -67,6 +68,15 @@ TEST_P(orb_scale, FindsThePartAtPointSevenAndOnePointFourWithItsScale) {
   auto out = (*fixed)->locate(warped(templ, 10, 0.7, 480.2, 360.9, 21).image);
   ASSERT_TRUE(out.has_value());
   EXPECT_TRUE(out->parts.empty()) << "found at scale " << out->parts.front().scale;
+  // ... and a part at the template's scale is reported at exactly the job's scale 1: the
+  // fit's few tenths of a percent would be a height of a few mm in vision::partPoses.
+  // (Failed before: 0.998.)
+  const Scene same = warped(templ, -30, 1.0, 470.7, 350.2, 23);
+  out = (*fixed)->locate(same.image);
+  ASSERT_TRUE(out.has_value());
+  ASSERT_EQ(out->parts.size(), 1u);
+  EXPECT_EQ(out->parts.front().scale, 1.0);
+  EXPECT_LT(std::hypot(out->parts.front().u - same.u, out->parts.front().v - same.v), 1.5);
 }
 
 INSTANTIATE_TEST_SUITE_P(methods, orb_scale, ::testing::Values("orb-ransac", "orb-adk"),

@@ -229,6 +229,9 @@ Result<LocateOutput> locateFeatureParts(const cv::Mat& gray, const TaughtTemplat
       continue;
     f.d.u += roi.x;
     f.d.v += roi.y;
+    // A fixed-scale job's parts are at its scale: the fit's scale within the tolerance
+    // (max_scale) is noise, which partPoses would otherwise turn into a height.
+    if (search.scaleMax <= search.scaleMin) f.d.scale = search.scaleMin;
     const std::size_t support = std::max(fitted->support, fitted->accepted.size());
     f.d.score = std::clamp(static_cast<double>(support) / search.fullScoreInliers, 0.0, 1.0);
     if (f.d.score < taught.minScore || f.d.angleDeg < taught.angleMinDeg || f.d.angleDeg > taught.angleMaxDeg) continue;

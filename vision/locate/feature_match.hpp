@@ -72,7 +72,8 @@ std::vector<Match> matchNearest(const Features& tmpl, const Features& img, const
 
 // Paper 001, eq. (15): the template's grasp point through the homography H (template px ->
 // image px), the rotation of H at that point, counter-clockwise as displayed, in
-// (-180, 180], and its scale there (sqrt of the Jacobian's determinant, Detection::scale).
+// (-180, 180], and its scale there (sqrt of the Jacobian's determinant, Detection::scale;
+// locateFeatureParts reports the job's scale instead for a job without a scale range).
 // Returns false when H is degenerate there (w ~ 0, a mirror) or its scale is outside
 // [minScale, maxScale].
 bool poseFromHomography(const cv::Matx33d& H, PixelPoint grasp, double minScale, double maxScale, Detection& out);

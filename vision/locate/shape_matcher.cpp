@@ -3,8 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <ctime>
-#include <cstdio>
-#include <cstdlib>
 #include <map>
 #include <string>
 #include <numbers>
@@ -59,8 +57,8 @@ class StageClock {
   double wall_ = 0, cpu_ = 0;
 };
 
-constexpr int kBins = 16;
-constexpr double kBeatenMargin = 0.1;  // pruneBeaten: a score this far below an overlapping candidate's  // quantised gradient directions of the top-level response maps (22.5 deg each)
+constexpr int kBins = 16;              // quantised gradient directions of the top-level response maps (22.5 deg each)
+constexpr double kBeatenMargin = 0.1;  // pruneBeaten: a score this far below an overlapping candidate's
 
 struct Candidate {
   double x = 0, y = 0;  // model origin, px of `level` (ROI coordinates)
@@ -973,9 +971,6 @@ Result<LocateOutput> ShapeLocator::locate(const cv::Mat& gray) {
   for (const WorkItem& it : items_) cands_.insert(cands_.end(), it.found.begin(), it.found.end());
   const std::size_t keep = static_cast<std::size_t>(4 * taught_.maxParts + 4);
   suppress(cands_, 1.5, 1.5 * maxTopStep_, keep);
-  const bool dbg = getenv("SHAPE_DBG") != nullptr;
-  auto dump = [&](const char* what) { if (!dbg) return; fprintf(stderr, "%s:", what); for (const auto& c : cands_) fprintf(stderr, " [L%d %.1f,%.1f %.2fdeg s%.3f %.3f]", c.level, c.x * (1 << c.level), c.y * (1 << c.level), -c.phi * 180 / 3.14159265, c.scale, c.score); fprintf(stderr, "\n"); };
-  dump("top");
   clock.lap(ShapeStageTimes::TopSearch);
 
   // Down to level 1, breadth first (a candidate of a band whose top is level 0 or 1 is there
@@ -1004,10 +999,8 @@ Result<LocateOutput> ShapeLocator::locate(const cv::Mat& gray) {
     forEach(static_cast<int>(next_.size()), [&](int i) { kept_[i] = trackDown(scratch_[i], next_[i], coarseThr); });
     for (std::size_t i = 0; i < next_.size(); ++i)
       if (kept_[i]) cands_.push_back(next_[i]);
-    dump("tracked");
     suppress(cands_, 1.5, 0.6 * angleStep(l, taught_.scaleMax), keep);
     pruneBeaten(cands_, l);
-    dump("pruned");
   }
   // Level 0: from twice the level-1 pose, hill-climb and interpolate (interpolatePeak).
   const double regionExtra = graspRegionPts_.empty() || !p_.refine ? 0.0 : p_.regionShiftPx;
@@ -1026,7 +1019,6 @@ Result<LocateOutput> ShapeLocator::locate(const cv::Mat& gray) {
     interpolatePeak(r, c);
     kept_[i] = c.score >= minScore;
   });
-  dump("level0");
   next_.clear();
   for (std::size_t i = 0; i < cands_.size(); ++i)
     if (kept_[i]) next_.push_back(cands_[i]);
