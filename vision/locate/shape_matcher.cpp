@@ -1044,6 +1044,11 @@ Result<LocateOutput> ShapeLocator::locate(const cv::Mat& gray) {
     if (p_.refine) {
       smoothGradients(c);
       refine(r, c);
+      // The score of the refined pose (the model at its angle and scale, at the nearest
+      // pixel), not of the integer peak interpolatePeak started from: a function of the pose
+      // found rather than of the path to it (which min_score itself changes: replay_cli_test).
+      rotateModel(r, 0, c.phi, c.scale);
+      c.score = scoreAt(r, 0, cvRound(c.x), cvRound(c.y), c.sign);
     }
     double tx = c.x, ty = c.y;
     if (p_.refine) settleGraspRegion(r, c, tx, ty);  // scores on the level-0 tiles computed above
