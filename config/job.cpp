@@ -141,6 +141,7 @@ JobFile parse(const YAML::Node& root, const std::string& file, const std::string
   if (j.taught.scaleMax < j.taught.scaleMin) top.fail(top.get("scale_max"), "scale_max", "must not be below scale_min");
   j.partHeightMm = top.number("part_height_mm", 0, 0, 1000);
 
+  j.referenceGiven = top.has("reference");
   Section ref(file, top.get("reference"), "reference");
   j.referenceXMm = ref.number("x_mm", 0, -1e6, 1e6);
   j.referenceYMm = ref.number("y_mm", 0, -1e6, 1e6);

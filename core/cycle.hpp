@@ -4,6 +4,8 @@
 
 #include <chrono>
 #include <cstdint>
+#include <limits>
+#include <string>
 #include <vector>
 
 #include "core/pose.hpp"
@@ -30,13 +32,28 @@ struct PartResult {
   int label = 0;           // part class (paper 002's labels); 0 when the method does not classify
 };
 
+// A part found but outside its job's limits (core/pose_limits.hpp): journalled, never
+// delivered to a robot or the PLC.
+struct RejectedPart {
+  PartResult part;
+  std::string why;  // "offset x 62.100 mm outside [-50, 50]"
+};
+
 struct CycleResult {
   std::uint32_t cycleId = 0;
   Status status = Status::Internal;
   int jobId = 0;
   TriggerSource trigger = TriggerSource::Modbus;
   std::uint64_t frameId = 0;   // camera frame (GVSP block) id, 0 when no frame
-  std::vector<PartResult> parts;  // best first
+  std::vector<PartResult> parts;  // best first; only parts within the job's limits
+  std::vector<RejectedPart> rejected;  // outside the limits; status -9 when `parts` is empty
+  Pose reference;              // the job's taught reference (base frame) the offsets are from
+  // The calibration drift monitor (daemon/drift_monitor.hpp), when the cell has one: the
+  // fixed fiducial's residual in this frame (mapped minus stored position, mm; NaN when it
+  // was not seen) and the alarm state after this frame.
+  bool driftMonitored = false;
+  double driftMm = std::numeric_limits<double>::quiet_NaN();
+  bool driftAlarm = false;
   double grabMs = 0, locateMs = 0, totalMs = 0;
   std::chrono::system_clock::time_point triggerTime;
   // The frame went to the image archive (vgrd's daemon/image_archive.hpp): the journal line

@@ -195,6 +195,14 @@ std::string_view dialectName(Dialect dialect) {
   return "?";
 }
 
+std::optional<Delivery> parseDelivery(std::string_view text) {
+  if (text == "pose") return Delivery::Pose;
+  if (text == "offset") return Delivery::Offset;
+  return std::nullopt;
+}
+
+std::string_view deliveryName(Delivery delivery) { return delivery == Delivery::Offset ? "offset" : "pose"; }
+
 // ---------------------------------------------------------------------------------------
 // RequestSplitter
 

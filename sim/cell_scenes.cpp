@@ -13,7 +13,8 @@ namespace {
 constexpr double kDegToRad = M_PI / 180.0;
 }  // namespace
 
-CellScenes::CellScenes(const config::CellConfig& cell) : mode_(cell.sim.scene), planeZ_(cell.model.planeZ) {
+CellScenes::CellScenes(const config::CellConfig& cell)
+    : mode_(cell.sim.scene), planeZ_(cell.model.planeZ), still_(cell.sim.still) {
   if (mode_ == "plate")
     plate_ = std::make_unique<SceneRenderer>(SceneRenderer::fromCellConfig(cell));
   else
@@ -50,14 +51,14 @@ CellPartTruth fromPlaced(const PartSceneRenderer& r, const PlacedPart& p, double
 std::vector<CellPartTruth> CellScenes::truth(std::uint64_t frameId) const {
   if (plate_) return {fromPlate(plate_->truthForFrame(frameId))};
   std::vector<CellPartTruth> out;
-  for (const auto& p : parts_->sample(frameId).parts) out.push_back(fromPlaced(*parts_, p, planeZ_));
+  for (const auto& p : parts_->sample(still_ ? 1 : frameId).parts) out.push_back(fromPlaced(*parts_, p, planeZ_));
   return out;
 }
 
 std::vector<CellPartTruth> CellScenes::render(std::uint64_t frameId, cv::Mat& dst) const {
   if (plate_) return {fromPlate(plate_->render(frameId, dst))};
-  const PartScene scene = parts_->sample(frameId);
-  parts_->render(scene, dst);
+  const PartScene scene = parts_->sample(still_ ? 1 : frameId);
+  parts_->render(scene, dst, frameId);
   std::vector<CellPartTruth> out;
   for (const auto& p : scene.parts) out.push_back(fromPlaced(*parts_, p, planeZ_));
   return out;

@@ -6,6 +6,10 @@
 // (PartSceneRenderer: holes, printed marks, machining grain; `multi` with 2-4 height
 // levels), so that every localization method, the feature ones included, can run in the
 // simulated cell. In every mode a frame is a pure function of (config, frame id).
+// Commissioning keys (docs/commissioning.md): `sim.still` keeps the parts of frame 1 in
+// every frame (only the noise changes), `sim.camera_shift` renders through a camera moved
+// from `model` (parts stay where the nominal camera placed them), `sim.fiducial` draws a
+// fixed bright disk on the belt.
 #pragma once
 
 #include <cstdint>
@@ -49,6 +53,7 @@ class CellScenes {
   std::unique_ptr<SceneRenderer> plate_;
   std::unique_ptr<PartSceneRenderer> parts_;
   double planeZ_ = 0;
+  bool still_ = false;  // sim.still: every frame shows frame 1's parts
 };
 
 // The image angle (CCW as displayed) of the base frame's +x axis for the cell's camera: what

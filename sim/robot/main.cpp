@@ -12,6 +12,12 @@
 //           and checks magic and length.
 // (`strict` is a push protocol, not a poll: tests/integration/robot_wire_test.cpp plays it.)
 //
+// --program FILE... --config CELL (abb, fanuc, ur): plays an example robot program of
+// examples/robot/ that applies offsets (sim/robot/robot_program.hpp): sends the program's
+// own requests (RAPID's JOB,<n># once per connection, then its GET), and for every OK
+// reply prints where the program would move the tool and which part pose that picks
+// ("part_x_mm" ... in the base frame), for a test to hold against the renderer's truth.
+//
 // Output: one line per reply on stdout (JSON with --json); diagnostics on stderr.
 // A reply that does not come within --timeout-ms counts as invalid (the protocol promises a
 // reply, possibly an error status, before the robot's read times out); the connection is
@@ -49,8 +55,10 @@
 #include <boost/asio/write.hpp>
 #include <nlohmann/json.hpp>
 
+#include "config/cell_config.hpp"
 #include "core/log.hpp"
 #include "protocol/robot_codec.hpp"
+#include "sim/robot/robot_program.hpp"
 
 namespace {
 
@@ -75,6 +83,8 @@ struct Options {
   int intervalMs = 100;
   int timeoutMs = 3000;
   bool json = false;
+  std::vector<std::string> program;  // --program files
+  std::string config;                // --config: the cell the program's robot is in
 };
 
 // A reply checked against the dialect; the numbers are set only when valid.
@@ -84,6 +94,7 @@ struct Parsed {
   int status = 0;
   long long cycle = 0;
   double xMm = 0, yMm = 0, zMm = 0, rzDeg = 0;
+  std::array<double, 6> values{};  // the six pose numbers as the dialect carries them
 };
 
 double round3(double v) {
@@ -105,6 +116,7 @@ Parsed parseBinary(const std::string& raw) {
   p.yMm = round3(bin::readInt32(raw, 20) / 1000.0);
   p.zMm = round3(bin::readInt32(raw, 24) / 1000.0);
   p.rzDeg = round3(bin::readInt32(raw, 36) / 1000.0);  // r, millidegrees
+  for (std::size_t i = 0; i < 6; ++i) p.values[i] = bin::readInt32(raw, 16 + 4 * i) / 1000.0;
   p.valid = true;
   return p;
 }
@@ -150,6 +162,7 @@ Parsed parseReply(Dialect dialect, const std::string& raw) {
     if (comma == std::string_view::npos) break;
     body.remove_prefix(comma + 1);
   }
+  p.values = v;
   if (dialect == Dialect::Ur) {  // metres + rotation vector; planar case: rz = v.z
     p.xMm = round3(v[0] * 1000.0);
     p.yMm = round3(v[1] * 1000.0);
@@ -172,14 +185,16 @@ Parsed parseReply(Dialect dialect, const std::string& raw) {
 
 class SimRobot {
  public:
-  SimRobot(asio::io_context& io, Options opt, Dialect dialect)
-      : io_(io), opt_(std::move(opt)), dialect_(dialect), socket_(io), timer_(io), signals_(io, SIGINT, SIGTERM) {
+  SimRobot(asio::io_context& io, Options opt, Dialect dialect, std::optional<vgr::sim::RobotProgram> program)
+      : io_(io), opt_(std::move(opt)), dialect_(dialect), program_(std::move(program)), socket_(io), timer_(io),
+        signals_(io, SIGINT, SIGTERM) {
     switch (dialect_) {
       case Dialect::Ur: request_ = "GET," + std::to_string(opt_.job) + "\n"; break;
       case Dialect::Fanuc: request_ = "GET," + std::to_string(opt_.job) + "\r\n"; break;
       case Dialect::Binary: request_ = vgr::protocol::binary::encodeRequest(vgr::protocol::binary::kCmdGet, opt_.job); break;
       default: request_ = "GET," + std::to_string(opt_.job) + "#"; break;
     }
+    if (program_) request_ = program_->request;
   }
 
   void start() {
@@ -216,6 +231,7 @@ class SimRobot {
         socket_.set_option(tcp::no_delay(true), optEc);
         vgr::log::info("sim", "{}: connected to {}:{}", opt_.name, opt_.host, opt_.port);
         rx_.clear();
+        setupLeft_ = program_ ? program_->setup.size() : 0;
         exchange();
         return;
       }
@@ -240,7 +256,9 @@ class SimRobot {
     timer_.async_wait([this, id](const error_code& ec) {
       if (!ec && id == exchangeId_) onTimeout();
     });
-    asio::async_write(socket_, asio::buffer(request_), [this, id](const error_code& ec, std::size_t) {
+    // A program's setup requests (RAPID: JOB,<n>#) go first on every connection.
+    const std::string& request = setupLeft_ > 0 ? program_->setup[program_->setup.size() - setupLeft_] : request_;
+    asio::async_write(socket_, asio::buffer(request), [this, id](const error_code& ec, std::size_t) {
       if (id != exchangeId_ || done_) return;
       if (ec) {
         connectionLost(ec);
@@ -310,6 +328,18 @@ class SimRobot {
 
   void replied(const std::string& raw) {
     retire();
+    if (setupLeft_ > 0) {
+      // The answer to a setup request: status 0 or the program stops (RAPID: Stop).
+      --setupLeft_;
+      const Parsed p = parseReply(dialect_, raw);
+      if (!p.valid || p.status != 0) {
+        std::cerr << "vgr-sim-robot: " << opt_.name << ": setup request refused: " << raw << "\n";
+        finish(1);
+        return;
+      }
+      exchange();
+      return;
+    }
     record(raw, {});
     next();
   }
@@ -397,6 +427,18 @@ class SimRobot {
         line["error"] = p.error;
       }
       line["raw"] = raw;
+      if (p.valid && p.status == 0 && program_) {
+        // Where the program moves the tool, and the part that picks (base frame).
+        const vgr::Pose tool = program_->tcp(p.values);
+        const vgr::Pose part = vgr::compose(tool, vgr::inverse(program_->grip));
+        const auto e = vgr::toEulerZyxDeg(part);
+        line["part_x_mm"] = part.x;
+        line["part_y_mm"] = part.y;
+        line["part_z_mm"] = part.z;
+        line["part_rz_deg"] = e.rz;
+        line["part_ry_deg"] = e.ry;
+        line["part_rx_deg"] = e.rx;
+      }
       std::cout << line.dump(-1, ' ', false, Json::error_handler_t::replace) << std::endl;
     } else if (p.valid) {
       std::cout << fmt::format("{} #{} valid status={} cycle={} x={:.3f} y={:.3f} z={:.3f} rz={:.3f} raw={}", opt_.name,
@@ -430,6 +472,8 @@ class SimRobot {
   asio::io_context& io_;
   const Options opt_;
   const Dialect dialect_;
+  const std::optional<vgr::sim::RobotProgram> program_;
+  std::size_t setupLeft_ = 0;  // setup requests still to send on this connection
   tcp::socket socket_;
   asio::steady_timer timer_;  // connect retry, reply timeout, interval: one at a time
   asio::signal_set signals_;
@@ -462,14 +506,35 @@ int main(int argc, char** argv) {
   app.add_option("--timeout-ms", opt.timeoutMs, "read timeout per reply")
       ->check(CLI::Range(1, 3600000));
   app.add_flag("--json", opt.json, "one JSON object per line");
+  app.add_option("--program", opt.program, "play this robot program of examples/robot/ (fanuc: vgr_bg.kl and VGR_PICK.ls)");
+  app.add_option("--config", opt.config, "with --program: the cell config the robot (--name) is in");
   if (const auto rc = vgr::cli::parse(app, argc, argv)) return *rc;
   const std::optional<Dialect> dialect = vgr::protocol::parseDialect(opt.dialect);
   if (!dialect) return 2;  // unreachable: checked by CLI11
   if (opt.name.empty()) opt.name = opt.dialect;
+  std::optional<vgr::sim::RobotProgram> program;
+  if (!opt.program.empty()) {
+    if (opt.config.empty()) {
+      std::cerr << "vgr-sim-robot: --program needs --config (the cell whose robot --name it plays)\n";
+      return 2;
+    }
+    auto cell = vgr::config::loadCellConfig(opt.config);
+    if (!cell) {
+      std::cerr << "vgr-sim-robot: " << cell.error().message << "\n";
+      return 2;
+    }
+    auto p = vgr::sim::loadRobotProgram(opt.program, *dialect, *cell, opt.name);
+    if (!p) {
+      std::cerr << "vgr-sim-robot: " << p.error().message << "\n";
+      return 2;
+    }
+    vgr::log::info("sim", "{}: playing {}", opt.name, p->summary);
+    program = std::move(*p);
+  }
 
   try {
     asio::io_context io;
-    SimRobot robot(io, opt, *dialect);
+    SimRobot robot(io, opt, *dialect, std::move(program));
     robot.start();
     io.run();
     return robot.exitCode();

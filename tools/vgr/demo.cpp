@@ -363,10 +363,23 @@ int runDemo(const DemoOptions& o) {
         ++t.mismatched;
         continue;
       }
-      const auto& part = jit->second["parts"][0];
-      if (std::abs(part.value("x_mm", 0.0) - j.value("x_mm", 1e9)) > 0.01 ||
-          std::abs(part.value("y_mm", 0.0) - j.value("y_mm", 1e9)) > 0.01 ||
-          angleDiffDeg(part.value("rz_deg", 0.0), j.value("rz_deg", 1e9)) > 0.01)
+      // A robot in offset mode or a user frame gets what the journal's "robots" entry
+      // says (x, y, z, rz, ry, rx); the others the base-frame pose of parts[0].
+      double x = 0, y = 0, rz = 0;
+      const auto& line = jit->second;
+      if (line.contains("robots") && line["robots"].contains(name)) {
+        const auto& pose = line["robots"][name]["poses"][0];
+        x = pose[0].get<double>();
+        y = pose[1].get<double>();
+        rz = pose[3].get<double>();
+      } else {
+        const auto& part = line["parts"][0];
+        x = part.value("x_mm", 0.0);
+        y = part.value("y_mm", 0.0);
+        rz = part.value("rz_deg", 0.0);
+      }
+      if (std::abs(x - j.value("x_mm", 1e9)) > 0.01 || std::abs(y - j.value("y_mm", 1e9)) > 0.01 ||
+          angleDiffDeg(rz, j.value("rz_deg", 1e9)) > 0.01)
         ++t.mismatched;
     }
     if (t.invalid || t.mismatched || t.ok == 0) robotsOk = false;
