@@ -108,7 +108,8 @@ nlohmann::json partJson(const PartResult& p) {
           {"dx_mm", round3(p.offset.x)}, {"dy_mm", round3(p.offset.y)}, {"dz_mm", round3(p.offset.z)},
           {"drz_deg", round3(o.rz)},    {"dry_deg", round3(o.ry)},      {"drx_deg", round3(o.rx)},
           {"u_px", round3(p.uPx)},      {"v_px", round3(p.vPx)},        {"angle_img_deg", round3(p.angleImgDeg)},
-          {"score", round3(p.score)},   {"label", p.label},             {"confidence", round3(p.confidence)}};
+          {"scale", std::round(p.scale * 1e5) / 1e5}, {"score", round3(p.score)}, {"label", p.label},
+          {"confidence", round3(p.confidence)}};
 }
 
 }  // namespace

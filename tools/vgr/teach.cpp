@@ -122,6 +122,9 @@ int runTeach(const TeachOptions& o) {
   job.taught.angleMinDeg = o.angleMin;
   job.taught.angleMaxDeg = o.angleMax;
   if (o.angleMax < o.angleMin) return badInput("--angle-max must not be below --angle-min");
+  job.taught.scaleMin = o.scaleMin;
+  job.taught.scaleMax = o.scaleMax;
+  if (o.scaleMax < o.scaleMin) return badInput("--scale-max must not be below --scale-min");
   job.partHeightMm = o.partHeightMm;
   for (const auto& p : o.params) {
     const auto eq = p.find('=');
@@ -177,6 +180,10 @@ CLI::App* TeachCommand::add(CLI::App& parent) {
   teachCmd->add_option("--max-parts", t.maxParts, "[1, 64]")->check(CLI::Range(1, 64));
   teachCmd->add_option("--angle-min", t.angleMin, "deg")->check(CLI::Range(-180.0, 180.0));
   teachCmd->add_option("--angle-max", t.angleMax, "deg")->check(CLI::Range(-180.0, 180.0));
+  teachCmd->add_option("--scale-min", t.scaleMin, "smallest scale searched, image px per template px (default 1)")
+      ->check(CLI::Range(kMinPartScale, kMaxPartScale));
+  teachCmd->add_option("--scale-max", t.scaleMax, "largest scale searched (default 1; a part seen larger is nearer the camera)")
+      ->check(CLI::Range(kMinPartScale, kMaxPartScale));
   teachCmd->add_option("--part-height", t.partHeightMm, "grasp height above the conveyor, mm")->check(CLI::Range(0.0, 1000.0));
   teachCmd->add_option("--name", t.name, "job name (default: the folder name)");
   teachCmd->add_option("--out", t.out, "job folder to create")->required();

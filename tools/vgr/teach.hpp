@@ -15,6 +15,7 @@ struct TeachOptions {
   std::string image, out, method = "moments", roi, regionsFile, name;
   std::vector<std::string> grasps, params;
   double minScore = 0.5, angleMin = -180, angleMax = 180, partHeightMm = 0;
+  double scaleMin = 1, scaleMax = 1;  // image px per template px, [kMinPartScale, kMaxPartScale]
   int maxParts = 1;
   bool autoRegions = true;
   // 3D (docs/3d.md "Jobs"): a job of kind 3d from a model cloud (PLY x y z nx ny nz, mm);
