@@ -17,6 +17,7 @@
 #include <boost/beast/http/write.hpp>
 
 #include "core/log.hpp"
+#include "core/token_bucket.hpp"
 
 namespace vgr::daemon {
 
@@ -30,6 +31,14 @@ namespace {
 constexpr std::size_t kHeaderLimitBytes = 8 * 1024;
 constexpr auto kIoTimeout = std::chrono::seconds(10);
 constexpr std::size_t kMaxConnections = 32;
+// One peer address may hold at most this many of them: a connection storm or a slowloris
+// from one host leaves the rest to everyone else (issue 19).
+constexpr std::size_t kMaxConnectionsPerAddress = 8;
+// And what one peer can make the I/O thread do is bounded: new connections at most 200 a
+// second (more wait in the listen backlog), requests of one connection at most 2000 a
+// second (more wait in its socket).
+constexpr double kAcceptsPerSecond = 200, kAcceptBurst = 50;
+constexpr double kRequestsPerSecond = 2000, kRequestBurst = 200;
 constexpr auto kAcceptRetryDelay = std::chrono::milliseconds(200);
 }  // namespace
 
@@ -44,6 +53,8 @@ struct WebServer::Impl : std::enable_shared_from_this<WebServer::Impl> {
   tcp::acceptor acceptor;
   asio::steady_timer retry;
   std::set<Session*> sessions;  // I/O thread only
+  std::map<asio::ip::address, std::size_t> perAddress;  // open sessions by peer address, I/O thread
+  TokenBucket acceptBudget{kAcceptsPerSecond, kAcceptBurst};
   bool stopped = false;
   std::uint16_t boundPort = 0;
 
@@ -53,10 +64,12 @@ struct WebServer::Impl : std::enable_shared_from_this<WebServer::Impl> {
 
 class WebServer::Impl::Session : public std::enable_shared_from_this<Session> {
  public:
-  Session(std::shared_ptr<Impl> server, tcp::socket socket) : server_(std::move(server)), stream_(std::move(socket)) {}
+  Session(std::shared_ptr<Impl> server, tcp::socket socket, asio::ip::address peer)
+      : server_(std::move(server)), stream_(std::move(socket)), peer_(std::move(peer)), pace_(stream_.get_executor()) {}
 
   void start() {
     server_->sessions.insert(this);
+    ++server_->perAddress[peer_];
     doRead();
   }
   void close() {
@@ -67,6 +80,13 @@ class WebServer::Impl::Session : public std::enable_shared_from_this<Session> {
 
  private:
   void doRead() {
+    if (!budget_.take()) {  // over the connection's request rate: read on when a token comes
+      pace_.expires_at(budget_.nextToken());
+      pace_.async_wait([self = shared_from_this()](const error_code& ec) {
+        if (!ec) self->doRead();
+      });
+      return;
+    }
     parser_.emplace();
     parser_->header_limit(kHeaderLimitBytes);
     parser_->body_limit(0);
@@ -103,11 +123,16 @@ class WebServer::Impl::Session : public std::enable_shared_from_this<Session> {
 
   void finish() {
     close();
-    server_->sessions.erase(this);
+    if (server_->sessions.erase(this) == 0) return;
+    if (auto it = server_->perAddress.find(peer_); it != server_->perAddress.end() && --it->second == 0)
+      server_->perAddress.erase(it);
   }
 
   std::shared_ptr<Impl> server_;
   beast::tcp_stream stream_;
+  asio::ip::address peer_;
+  asio::steady_timer pace_;
+  TokenBucket budget_{kRequestsPerSecond, kRequestBurst};
   beast::flat_buffer buffer_{kHeaderLimitBytes};
   std::optional<http::request_parser<http::empty_body>> parser_;
 };
@@ -136,13 +161,24 @@ void WebServer::Impl::doAccept() {
       });
       return;
     }
-    if (self->sessions.size() >= kMaxConnections) {
+    error_code peerEc;
+    const asio::ip::address peer = socket.remote_endpoint(peerEc).address();
+    const auto fromPeer = self->perAddress.find(peer);
+    if (peerEc || self->sessions.size() >= kMaxConnections ||
+        (fromPeer != self->perAddress.end() && fromPeer->second >= kMaxConnectionsPerAddress)) {
       error_code ignored;
-      socket.close(ignored);  // over the limit: refuse this one, keep serving the others
+      socket.close(ignored);  // gone already, or over a limit: refuse this one, keep serving the others
     } else {
-      std::make_shared<Session>(self, std::move(socket))->start();
+      std::make_shared<Session>(self, std::move(socket), peer)->start();
     }
-    self->doAccept();
+    if (self->acceptBudget.take()) {
+      self->doAccept();
+      return;
+    }
+    self->retry.expires_at(self->acceptBudget.nextToken());
+    self->retry.async_wait([self](const error_code& rec) {
+      if (!rec) self->doAccept();
+    });
   });
 }
 

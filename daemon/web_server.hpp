@@ -6,7 +6,8 @@
 // Threads: everything runs on the io_context's thread (the daemon's I/O thread); route()
 // before start(); handlers run there too and must not block. Limits (Beast's server
 // shape, STYLE.md rule 9): request head <= 8 KiB, no request body accepted, 10 s to read a
-// request and to write a reply, at most 32 connections at once; keep-alive honoured.
+// request and to write a reply, at most 32 connections at once and 8 from one peer address;
+// keep-alive honoured.
 // Only GET and HEAD: other methods get 405, unknown paths 404.
 #pragma once
 
