@@ -4,6 +4,7 @@
 // example cell (config/examples/sim-cell.yaml): address 127.0.0.1, serial VGR-SIM-0, seed 1.
 // Several cameras: --camera SERIAL@ADDRESS, repeated (one address each; camera i renders
 // with seed + i). SIGUSR1 = one edge on every camera's Line0 (simulated hardware trigger).
+// SIGUSR2 toggles the GVSP packet loss between --loss and --loss-burst (fault injection).
 #include <csignal>
 #include <cstdio>
 #include <memory>
@@ -19,8 +20,10 @@
 namespace {
 volatile std::sig_atomic_t gStop = 0;
 volatile std::sig_atomic_t gPulses = 0;
+volatile std::sig_atomic_t gLossToggles = 0;
 void onSignal(int) { gStop = 1; }
 void onPulse(int) { gPulses = gPulses + 1; }
+void onLossToggle(int) { gLossToggles = gLossToggles + 1; }
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -29,7 +32,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> cameraSpecs;
   long long seed = -1;
   int width = 0, height = 0;
-  double loss = 0.0, fps = 25.0;
+  double loss = 0.0, lossBurst = 0.05, fps = 25.0;
   app.add_option("--config", configPath, "cell config whose camera and sim sections to serve (default: the embedded sim-cell.yaml)");
   app.add_option("--address", address, "IPv4 address to serve on (default: the config's camera.address)");
   app.add_option("--serial", serial, "serial number (default: the config's sim.serial)");
@@ -38,6 +41,7 @@ int main(int argc, char** argv) {
   app.add_option("--width", width, "sensor width in px (default: the config's sim.width)")->check(CLI::Range(64, 2448));
   app.add_option("--height", height, "sensor height in px (default: the config's sim.height)")->check(CLI::Range(64, 2048));
   app.add_option("--loss", loss, "probability that a GVSP packet is dropped, e.g. 1e-4")->check(CLI::Range(0.0, 1.0));
+  app.add_option("--loss-burst", lossBurst, "packet loss while a burst is on (SIGUSR2 toggles it)")->check(CLI::Range(0.0, 1.0));
   app.add_option("--fps", fps, "free-run frame rate")->check(CLI::Range(0.1, 1000.0));
   app.add_option("--scene", scene, "what to show: plate, part (textured) or multi (height levels) (default: the config's sim.scene)")
       ->check(CLI::IsMember({"plate", "part", "multi"}));
@@ -93,15 +97,22 @@ int main(int argc, char** argv) {
   std::signal(SIGTERM, onSignal);
   std::signal(SIGINT, onSignal);
   std::signal(SIGUSR1, onPulse);
+  std::signal(SIGUSR2, onLossToggle);
   std::printf("{\"event\":\"ready\",\"address\":\"%s\",\"serial\":\"%s\",\"seed\":%llu,\"cameras\":%zu}\n",
               cams[0].address.c_str(), cams[0].serial.c_str(), static_cast<unsigned long long>(cfg->sim.seed), cams.size());
   std::fflush(stdout);
-  int handled = 0;
+  int handled = 0, togglesHandled = 0;
+  bool burst = false;
   while (!gStop) {
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
     while (handled != gPulses) {
       ++handled;
       for (auto& e : emulators) e->pulseLine();
+    }
+    while (togglesHandled != gLossToggles) {
+      ++togglesHandled;
+      burst = !burst;
+      for (auto& e : emulators) e->setLossRatio(burst ? lossBurst : loss);
     }
   }
   for (std::size_t i = 0; i < emulators.size(); ++i)

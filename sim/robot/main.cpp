@@ -19,20 +19,13 @@
 // the daemon is re-opened (for up to 10 s) and the unanswered request sent again.
 // Exit: 0 all replies valid, 1 any invalid reply, 2 usage or connection failure.
 // Single-threaded: one io_context run by main().
-#if defined(__GNUC__) && !defined(__clang__)
-// GCC 12 reports a false -Wmaybe-uninitialized inside <regex> in sanitizer builds.
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#endif
-
 #include <array>
-#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstdint>
 #include <iostream>
 #include <optional>
-#include <regex>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -49,6 +42,7 @@
 
 #include "core/log.hpp"
 #include "protocol/robot_codec.hpp"
+#include "protocol/robot_reply.hpp"
 
 namespace {
 
@@ -61,7 +55,6 @@ using vgr::protocol::Dialect;
 constexpr auto kConnectWindow = std::chrono::seconds(10);
 constexpr auto kConnectRetryDelay = std::chrono::milliseconds(200);
 constexpr std::size_t kMaxReplyBytes = 1024;  // ur/fanuc: give up looking for the end after this
-constexpr double kPi = 3.14159265358979323846;
 
 struct Options {
   std::string dialect;
@@ -75,7 +68,8 @@ struct Options {
   bool json = false;
 };
 
-// A reply checked against the dialect; the numbers are set only when valid.
+// A reply checked against the dialect (protocol/robot_reply.hpp); the numbers are set only
+// when valid.
 struct Parsed {
   bool valid = false;
   std::string error;
@@ -84,87 +78,20 @@ struct Parsed {
   double xMm = 0, yMm = 0, zMm = 0, rzDeg = 0;
 };
 
-double round3(double v) {
-  const double r = std::round(v * 1000.0) / 1000.0;
-  return r == 0.0 ? 0.0 : r;  // no -0 in the output
-}
-
-Parsed parseBinary(const std::string& raw) {
-  namespace bin = vgr::protocol::binary;
-  Parsed p;
-  if (raw.size() != bin::kReplyBytes || static_cast<std::uint32_t>(bin::readInt32(raw, 0)) != bin::kReplyMagic ||
-      bin::readInt32(raw, 4) != static_cast<std::int32_t>(bin::kReplyBytes)) {
-    p.error = "not a 40-byte VGRA frame";
-    return p;
-  }
-  p.status = bin::readInt32(raw, 8);
-  p.cycle = bin::readInt32(raw, 12);
-  p.xMm = round3(bin::readInt32(raw, 16) / 1000.0);  // µm
-  p.yMm = round3(bin::readInt32(raw, 20) / 1000.0);
-  p.zMm = round3(bin::readInt32(raw, 24) / 1000.0);
-  p.rzDeg = round3(bin::readInt32(raw, 36) / 1000.0);  // r, millidegrees
-  p.valid = true;
-  return p;
-}
-
 Parsed parseReply(Dialect dialect, const std::string& raw) {
-  if (dialect == Dialect::Binary) return parseBinary(raw);
-  static const std::regex kUr(R"(\(-?\d+,\d+(,-?\d+\.\d{6}){6}\))");
-  static const std::regex kAbb(R"(-?\d+,\d+(,-?\d+\.\d{3}){6})");
-  // Fixed columns: status, cycle, X, Y, Z, W, P, R, CR LF (docs/protocols.md, "fanuc").
-  static const std::regex kFanuc(R"([+-]\d{4},\d{7}(,[+-]\d{5}\.\d{3}){3}(,[+-]\d{3}\.\d{3}){3}\r\n)");
-  const std::regex& re = dialect == Dialect::Ur ? kUr : dialect == Dialect::Fanuc ? kFanuc : kAbb;
   Parsed p;
-  if (!std::regex_match(raw, re)) {
-    p.error = "does not match the dialect";
+  const vgr::Result<vgr::protocol::ParsedReply> r = vgr::protocol::parseRobotReply(dialect, raw);
+  if (!r) {
+    p.error = r.error().message;
     return p;
-  }
-  if (dialect == Dialect::Abb && raw.size() > vgr::protocol::kAbbMaxReplyChars) {
-    p.error = "longer than 80 characters";
-    return p;
-  }
-  std::string_view body(raw);
-  if (dialect == Dialect::Ur) body = body.substr(1, body.size() - 2);
-  if (dialect == Dialect::Fanuc) body = body.substr(0, body.size() - 2);
-  std::array<double, 6> v{};
-  std::size_t field = 0;
-  while (field < 8) {
-    const std::size_t comma = body.find(',');
-    std::string_view text = body.substr(0, comma);
-    if (!text.empty() && text.front() == '+') text.remove_prefix(1);  // from_chars takes no '+'
-    std::from_chars_result res{};
-    if (field == 0) {
-      res = std::from_chars(text.data(), text.data() + text.size(), p.status);
-    } else if (field == 1) {
-      res = std::from_chars(text.data(), text.data() + text.size(), p.cycle);
-    } else {
-      res = std::from_chars(text.data(), text.data() + text.size(), v[field - 2]);
-    }
-    if (res.ec != std::errc{}) {
-      p.error = "number out of range";
-      return p;
-    }
-    ++field;
-    if (comma == std::string_view::npos) break;
-    body.remove_prefix(comma + 1);
-  }
-  if (dialect == Dialect::Ur) {  // metres + rotation vector; planar case: rz = v.z
-    p.xMm = round3(v[0] * 1000.0);
-    p.yMm = round3(v[1] * 1000.0);
-    p.zMm = round3(v[2] * 1000.0);
-    p.rzDeg = round3(v[5] * 180.0 / kPi);
-  } else if (dialect == Dialect::Fanuc) {  // mm + W, P, R degrees: rz is R, the last
-    p.xMm = round3(v[0]);
-    p.yMm = round3(v[1]);
-    p.zMm = round3(v[2]);
-    p.rzDeg = round3(v[5]);
-  } else {  // mm + Z-Y-X degrees: rz is the first angle
-    p.xMm = round3(v[0]);
-    p.yMm = round3(v[1]);
-    p.zMm = round3(v[2]);
-    p.rzDeg = round3(v[3]);
   }
   p.valid = true;
+  p.status = r->status;
+  p.cycle = r->cycle;
+  p.xMm = r->xMm;
+  p.yMm = r->yMm;
+  p.zMm = r->zMm;
+  p.rzDeg = r->rzDeg;
   return p;
 }
 

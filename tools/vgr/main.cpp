@@ -6,6 +6,8 @@
 //   vgr calibrate intrinsics|handeye|plane|synth ...   calibration (docs/calibration.md)
 //   vgr sim render | teach | locate | eval   localization datasets, jobs, runs (docs/localization.md)
 //   vgr classify train | eval   paper 002's part classifier (docs/classification.md)
+//   vgr soak [--triggers N]   fault-injection run of the simulated cell (docs/robustness.md)
+//   vgr journal-bench         the journal's write and fdatasync cost per record (docs/journal.md)
 #include <map>
 #include <memory>
 #include <string>
@@ -27,7 +29,9 @@
 #include "tools/vgr/eval.hpp"
 #include "tools/vgr/grab.hpp"
 #include "tools/vgr/locate.hpp"
+#include "tools/vgr/journal_bench.hpp"
 #include "tools/vgr/sim_render.hpp"
+#include "tools/vgr/soak.hpp"
 #include "tools/vgr/subcommand.hpp"
 #include "tools/vgr/teach.hpp"
 
@@ -62,6 +66,7 @@ int main(int argc, char** argv) {
   // Every subcommand, in the order `vgr --help` lists them.
   Entry table[] = {
       {nullptr, std::make_unique<tools::DemoCommand>()},
+      {nullptr, std::make_unique<tools::SoakCommand>()},
       {nullptr, std::make_unique<tools::CheckCommand>()},
       {nullptr, std::make_unique<tools::CamerasCommand>()},
       {nullptr, std::make_unique<tools::GrabCommand>()},
@@ -75,6 +80,7 @@ int main(int argc, char** argv) {
       {nullptr, std::make_unique<tools::EvalCommand>()},
       {"classify", std::make_unique<tools::ClassifyTrainCommand>()},
       {"classify", std::make_unique<tools::ClassifyEvalCommand>()},
+      {nullptr, std::make_unique<tools::JournalBenchCommand>()},
   };
 
   std::map<std::string, CLI::App*> groups;  // added when their first member is
