@@ -11,6 +11,7 @@
 #include <regex>
 #include <string>
 
+#include "core/cycle.hpp"
 #include "protocol/robot_codec.hpp"
 
 namespace vgr::protocol {
@@ -38,10 +39,26 @@ Result<ParsedReply> parseBinaryReply(std::string_view raw) {
   return p;
 }
 
+// vgrd's cycle ids are in [0, kMaxCycleId] (0: no cycle): anything else is not a reply of
+// vgrd's (found by fuzz_robot_reply: a binary reply with a negative cycle passed).
+Result<ParsedReply> checkCycle(Result<ParsedReply> r) {
+  if (r && (r->cycle < 0 || r->cycle > static_cast<long long>(kMaxCycleId)))
+    return fail(Status::BadArgument, "cycle id out of range [0, 2^23 - 1]");
+  return r;
+}
+
+Result<ParsedReply> parseTextReply(Dialect dialect, std::string_view raw);
+
 }  // namespace
 
 Result<ParsedReply> parseRobotReply(Dialect dialect, std::string_view raw) {
-  if (dialect == Dialect::Binary) return parseBinaryReply(raw);
+  if (dialect == Dialect::Binary) return checkCycle(parseBinaryReply(raw));
+  return checkCycle(parseTextReply(dialect, raw));
+}
+
+namespace {
+
+Result<ParsedReply> parseTextReply(Dialect dialect, std::string_view raw) {
   if (dialect == Dialect::Strict) return fail(Status::BadArgument, "the strict dialect has no replies");
   static const std::regex kUr(R"(\(-?\d+,\d+(,-?\d+\.\d{6}){6}\))");
   static const std::regex kAbb(R"(-?\d+,\d+(,-?\d+\.\d{3}){6})");
@@ -89,4 +106,5 @@ Result<ParsedReply> parseRobotReply(Dialect dialect, std::string_view raw) {
   return p;
 }
 
+}  // namespace
 }  // namespace vgr::protocol

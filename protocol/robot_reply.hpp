@@ -26,7 +26,8 @@ struct ParsedReply {
 };
 
 // The reply, or Status::BadArgument saying what is wrong with it ("does not match the
-// dialect", "longer than 80 characters", "not a 40-byte VGRA frame", "number out of range").
+// dialect", "longer than 80 characters", "not a 40-byte VGRA frame", "number out of range",
+// "cycle id out of range": vgrd's cycle ids are in [0, 2^23 - 1]).
 // Dialect strict has no replies: BadArgument.
 Result<ParsedReply> parseRobotReply(Dialect dialect, std::string_view raw);
 

@@ -342,8 +342,10 @@ int runSoak(const SoakOptions& o) {
   plc.start();
 
   // Faults, on the main thread's clock; each runs on a thread of its own so they overlap.
-  const double horizon = o.durationS > 0 ? o.durationS : 1e9;
-  const auto plan = planFaults(o, kinds, o.triggers > 0 ? std::max(horizon, o.triggers / o.rateHz * 1.5) : horizon);
+  // Faults are planned up to the duration, or twice the time the triggers take at the rate
+  // (vgrd restarts and camera faults slow the PLC down).
+  const double horizon = o.durationS > 0 ? o.durationS : static_cast<double>(o.triggers) / o.rateHz * 2.0 + 600.0;
+  const auto plan = planFaults(o, kinds, horizon);
   std::map<std::string, int> injected;
   soak::AttackOutcome attacks;
   std::mutex attackMutex;
@@ -407,10 +409,12 @@ int runSoak(const SoakOptions& o) {
     }
     std::this_thread::sleep_for(20ms);
   }
-  // Let the last trigger and the robots' last requests finish, then stop everything.
-  std::this_thread::sleep_for(std::chrono::milliseconds(cfg->cycleDeadlineMs + 500));
-  cell.stop = true;
+  // The PLC finishes the trigger in flight and starts no other; the robots get the last
+  // result; then everything stops.
+  cell.draining = true;
   plc.stop();
+  std::this_thread::sleep_for(std::chrono::milliseconds(1000));
+  cell.stop = true;
   for (auto& r : robots) r->stop();
   for (auto& t : faultThreads) t.join();
   vgrd.stop();

@@ -19,7 +19,7 @@ namespace vgr::tools {
 
 struct SoakOptions {
   long long triggers = 0;         // stop after this many PLC triggers (0: the duration decides)
-  double durationS = 150;         // s: stop after this long (0: the trigger count decides)
+  double durationS = 0;           // s: stop after this long (0: the trigger count decides)
   double rateHz = 10;             // PLC triggers per second
   std::uint64_t seed = 1;         // random faults and their parameters
   std::string faults = "schedule";  // schedule (round robin over the kinds), random, none

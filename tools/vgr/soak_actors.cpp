@@ -207,7 +207,7 @@ void PlcActor::run() {
     return true;
   };
 
-  while (!cell_.stop && (options_.maxTriggers == 0 || n < options_.maxTriggers)) {
+  while (!cell_.stop && !cell_.draining && (options_.maxTriggers == 0 || n < options_.maxTriggers)) {
     std::this_thread::sleep_until(nextStart);
     nextStart = std::max(nextStart + period, Clock::now());
     // Wait for READY, not BUSY, no result pending (vgrd may be restarting): not a trigger yet.

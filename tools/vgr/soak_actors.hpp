@@ -29,6 +29,7 @@ double wallNow();
 struct CellState {
   std::atomic<int> incarnation{0};   // bumps when vgrd is killed
   std::atomic<bool> vgrdUp{false};   // READY=1 seen and not killed since
+  std::atomic<bool> draining{false}; // the PLC starts no new trigger (it finishes the one in flight)
   std::atomic<bool> stop{false};     // every actor ends its loop
 };
 
