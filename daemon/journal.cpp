@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/log.hpp"
+#include "daemon/image_archive.hpp"
 
 namespace vgr::daemon {
 
@@ -178,6 +179,7 @@ std::string Journal::toJson(const CycleResult& r) {
                      {"score", round3(p.score)}, {"label", p.label}});
   }
   j["parts"] = std::move(parts);
+  if (r.archived) j["archive"] = archiveStem(r.cycleId, r.triggerTime) + ".png";
   return j.dump();
 }
 

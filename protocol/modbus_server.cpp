@@ -116,6 +116,7 @@ struct ModbusServer::Impl {
   }
   std::uint16_t boundPort = 0;
   std::thread thread;
+  Heartbeat heartbeat;  // beaten by the Modbus thread at every poll() turn
 
   Result<void> start();
   void stop();
@@ -189,7 +190,10 @@ Result<void> ModbusServer::Impl::start() {
     return fail(Status::Internal, "modbus: cannot create server context for " + where + ": " + errnoText(err));
   }
 
-  thread = std::thread([this] { run(); });
+  thread = std::thread([this] {
+    nameThisThread("vgr-modbus");
+    run();
+  });
   log::info("modbus", "listening on {}:{} (max {} clients, {} per address, idle timeout {} ms, {} allowed, floats {})",
             options.bind, boundPort, options.maxClients, perAddress, options.idleTimeout.count(),
             allowed.empty() ? std::string("any client") : std::to_string(allowed.size()) + " addresses",
@@ -392,6 +396,7 @@ void ModbusServer::Impl::run() {
   auto nextBeat = Clock::now() + kHeartbeatPeriod;
   std::vector<pollfd> fds;
   for (;;) {
+    heartbeat.beat();
     fds.clear();
     fds.push_back({wakePipe[0], POLLIN, 0});
     fds.push_back({listenFd, POLLIN, 0});
@@ -509,6 +514,8 @@ ModbusServerStats ModbusServer::stats() const {
   return {a.accepted.load(), a.closed.load(), a.refusedNotAllowed.load(), a.refusedFull.load(), a.writesRefused.load(),
           a.logLinesHeldBack.load()};
 }
+
+const Heartbeat& ModbusServer::heartbeat() const { return impl_->heartbeat; }
 
 std::uint16_t ModbusServer::holdingRegister(std::uint16_t address) const {
   std::lock_guard lock(impl_->mutex);

@@ -9,10 +9,12 @@
 // must not block (contract of ModbusServer::TriggerHandler).
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <string>
 
+#include "core/heartbeat.hpp"
 #include "core/result.hpp"
 
 namespace vgr::protocol {
@@ -35,6 +37,11 @@ class PlcLink {
   // What the link counted since start (connections, refusals), one line for the daemon's
   // 60 s summary; empty when it counts nothing. Any thread.
   virtual std::string summary() const { return {}; }
+  // The link's thread beats this at every turn of its loop; stallLimit() is the longest
+  // legitimate gap between two beats. vgrd's systemd watchdog stops pinging when a link's
+  // thread stays silent longer (daemon/watchdog.hpp). Any thread.
+  virtual const Heartbeat& heartbeat() const = 0;
+  virtual std::chrono::milliseconds stallLimit() const = 0;
 };
 
 }  // namespace vgr::protocol

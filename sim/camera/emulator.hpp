@@ -24,6 +24,9 @@ struct EmulatorOptions {
   std::string imagesFolder;           // if set: serve these images (name order, looping) instead of scenes
   double lossRatio = 0.0;             // [0, 1]: probability that each GVSP packet is dropped
   double fps = 25.0;                  // free-run frame rate (AcquisitionFrameRate default), (0, 1000]
+  // > 0: every N-th frame (frame id divisible by N) shows the empty belt (no part, empty
+  // truth): a cell where every N-th cycle finds nothing (the archive's tests and bench).
+  int emptyEvery = 0;
 };
 
 class CameraEmulator {

@@ -1,7 +1,7 @@
 // `vgr locate`: runs a job's method on one image (docs/localization.md). With the job's
 // calibration (a cell config's `model`) each part also gets robot coordinates (mm, deg).
 // Exit code 0 (parts or none), 1 when the method fails (status and error in the JSON),
-// 2 on bad input (message on stderr).
+// 2 on bad input (message on stderr). --overlay writes the picture vgrd's web page shows.
 #pragma once
 
 #include <string>
@@ -12,6 +12,7 @@ namespace vgr::tools {
 
 struct LocateOptions {
   std::string job, image, method;
+  std::string overlay;  // PNG of the image with what was found drawn on it (vision/overlay.hpp); empty = none
   bool json = false;
 };
 

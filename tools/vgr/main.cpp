@@ -8,6 +8,7 @@
 //   vgr classify train | eval   paper 002's part classifier (docs/classification.md)
 //   vgr soak [--triggers N]   fault-injection run of the simulated cell (docs/robustness.md)
 //   vgr journal-bench         the journal's write and fdatasync cost per record (docs/journal.md)
+//   vgr replay --journal J --archive A --job DIR   a changed job on archived frames (docs/commissioning.md)
 #include <map>
 #include <memory>
 #include <string>
@@ -15,6 +16,8 @@
 #include <vector>
 
 #include <CLI/CLI.hpp>
+
+#include "core/cli.hpp"
 
 #include "core/version.hpp"
 
@@ -30,6 +33,7 @@
 #include "tools/vgr/grab.hpp"
 #include "tools/vgr/locate.hpp"
 #include "tools/vgr/journal_bench.hpp"
+#include "tools/vgr/replay.hpp"
 #include "tools/vgr/sim_render.hpp"
 #include "tools/vgr/soak.hpp"
 #include "tools/vgr/subcommand.hpp"
@@ -60,6 +64,7 @@ struct Entry {
 int main(int argc, char** argv) {
   namespace tools = vgr::tools;
   CLI::App app{"vgr: vision-guided robotics tool"};
+  vgr::cli::showDefaults(app);
   app.set_version_flag("--version", std::string("vgr ") + vgr::buildVersion());
   app.require_subcommand(1);
 
@@ -78,6 +83,7 @@ int main(int argc, char** argv) {
       {nullptr, std::make_unique<tools::TeachCommand>()},
       {nullptr, std::make_unique<tools::LocateCommand>()},
       {nullptr, std::make_unique<tools::EvalCommand>()},
+      {nullptr, std::make_unique<tools::ReplayCommand>()},
       {"classify", std::make_unique<tools::ClassifyTrainCommand>()},
       {"classify", std::make_unique<tools::ClassifyEvalCommand>()},
       {nullptr, std::make_unique<tools::JournalBenchCommand>()},
@@ -97,7 +103,7 @@ int main(int argc, char** argv) {
   std::vector<std::pair<CLI::App*, Subcommand*>> added;
   for (auto& e : table) added.emplace_back(e.command->add(e.group ? *groupApp(e.group) : app), e.command.get());
 
-  CLI11_PARSE(app, argc, argv);
+  if (const auto rc = vgr::cli::parse(app, argc, argv)) return *rc;
   for (const auto& [cli, command] : added)
     if (*cli) return command->run();
   return 0;
