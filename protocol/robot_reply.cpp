@@ -39,11 +39,19 @@ Result<ParsedReply> parseBinaryReply(std::string_view raw) {
   return p;
 }
 
-// vgrd's cycle ids are in [0, kMaxCycleId] (0: no cycle): anything else is not a reply of
-// vgrd's (found by fuzz_robot_reply: a binary reply with a negative cycle passed).
+// What vgrd sends lies in these ranges; anything else is not a reply of vgrd's (found by
+// fuzz_robot_reply: a binary reply with a negative cycle passed, and a ur reply with a
+// 200-digit x that became infinite in mm). Cycle ids in [0, kMaxCycleId] (0: no cycle),
+// statuses in [-99, 99], positions within kMaxAbsPositionMm, angles within 180 degrees
+// (ur: a rotation vector's components within pi).
 Result<ParsedReply> checkCycle(Result<ParsedReply> r) {
-  if (r && (r->cycle < 0 || r->cycle > static_cast<long long>(kMaxCycleId)))
+  if (!r) return r;
+  if (r->cycle < 0 || r->cycle > static_cast<long long>(kMaxCycleId))
     return fail(Status::BadArgument, "cycle id out of range [0, 2^23 - 1]");
+  if (r->status < -99 || r->status > 99) return fail(Status::BadArgument, "status out of range [-99, 99]");
+  for (const double mm : {r->xMm, r->yMm, r->zMm})
+    if (!(std::abs(mm) <= kMaxAbsPositionMm + 0.0005)) return fail(Status::BadArgument, "position out of range");
+  if (!(std::abs(r->rzDeg) <= 180.0005)) return fail(Status::BadArgument, "angle out of range");
   return r;
 }
 
@@ -86,6 +94,10 @@ Result<ParsedReply> parseTextReply(Dialect dialect, std::string_view raw) {
     if (res.ec != std::errc{}) return fail(Status::BadArgument, "number out of range");
     if (comma == std::string_view::npos) break;
     body.remove_prefix(comma + 1);
+  }
+  for (std::size_t i = 3; i < 6; ++i) {  // ur: a rotation vector (rad); abb, fanuc: degrees
+    if (!(std::abs(v[i]) <= (dialect == Dialect::Ur ? kPi + 1e-6 : 180.0005)))
+      return fail(Status::BadArgument, "angle out of range");
   }
   if (dialect == Dialect::Ur) {  // metres + rotation vector; planar case: rz = v.z
     p.xMm = round3(v[0] * 1000.0);

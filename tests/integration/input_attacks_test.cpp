@@ -43,7 +43,7 @@ using namespace std::chrono_literals;
 using vgr::test::TestSocket;
 using Clock = std::chrono::steady_clock;
 
-constexpr std::chrono::milliseconds kIdle{1000}, kAttack{1500};
+constexpr std::chrono::milliseconds kIdle{700}, kAttack{1000};
 
 double percentile(std::vector<double> v, double q) {
   if (v.empty()) return 0;

@@ -53,5 +53,18 @@ TEST(robot_reply, CycleIdsVgrdNeverSendsAreRefused) {
   EXPECT_TRUE(parseRobotReply(Dialect::Ur, "(0,8388607,0.512300,-0.120050,0.035000,0.000000,0.000000,-0.218166)"));
 }
 
+// Found by the long run of fuzz_robot_reply: a ur reply with a 200-digit x passed, and was
+// infinite in mm. vgrd never sends a position beyond 99999.999 mm or an angle beyond 180
+// degrees (pi for a rotation vector): such a reply is refused (fails before, passes after).
+TEST(robot_reply, NumbersVgrdNeverSendsAreRefused) {
+  const std::string huge(200, '5');
+  EXPECT_FALSE(parseRobotReply(Dialect::Ur, "(0,1," + huge + ".000000,0.000000,0.000000,0.000000,0.000000,0.000000)"));
+  EXPECT_FALSE(parseRobotReply(Dialect::Ur, "(0,1,100.000001,0.000000,0.000000,0.000000,0.000000,0.000000)"));
+  EXPECT_FALSE(parseRobotReply(Dialect::Ur, "(0,1,0.100000,0.000000,0.000000,0.000000,0.000000,4.000000)"));
+  EXPECT_FALSE(parseRobotReply(Dialect::Abb, "0,1,1.000,2.000,3.000,181.000,0.000,0.000"));
+  EXPECT_FALSE(parseRobotReply(Dialect::Abb, "100,1,1.000,2.000,3.000,1.000,0.000,0.000"));
+  EXPECT_TRUE(parseRobotReply(Dialect::Abb, "-9,1,0.000,0.000,0.000,0.000,0.000,0.000"));
+}
+
 }  // namespace
 }  // namespace vgr::protocol
