@@ -39,10 +39,19 @@ constexpr std::size_t kMaxConnections = 32;
 // One peer address may hold at most this many of them: a connection storm or a slowloris
 // from one host leaves the rest to everyone else (issue 19).
 constexpr std::size_t kMaxConnectionsPerAddress = 8;
-// And what one peer can make the I/O thread do is bounded: new connections at most 200 a
-// second (more wait in the listen backlog), requests of one connection at most 2000 a
-// second (more wait in its socket).
-constexpr double kAcceptsPerSecond = 200, kAcceptBurst = 50;
+// And what one peer can make the I/O thread do is bounded: sessions from one address at
+// most 200 a second (more are closed as soon as they are accepted), requests of one
+// connection at most 2000 a second (more wait in its socket). The listen backlog itself is
+// drained at up to 5000 accepts a second (an accept and a close cost a few microseconds):
+// whatever waits there waits for everyone, so a storm's leftovers must not stay in it. At
+// 200 accepts a second, the ~3400 connections a one-thread storm left there took 17 s to
+// drain, and every new client, from any address, waited behind them (input_attacks_test).
+constexpr double kAcceptsPerSecond = 5000, kAcceptBurst = 500;
+constexpr double kSessionsPerSecondPerAddress = 200, kSessionBurstPerAddress = 50;
+// Session budgets are kept for this many recently seen addresses; a budget unused for
+// kPeerBudgetIdle is full again and may be forgotten. Beyond that, addresses share one.
+constexpr std::size_t kMaxPeerBudgets = 256;
+constexpr auto kPeerBudgetIdle = std::chrono::seconds(1);
 constexpr double kRequestsPerSecond = 2000, kRequestBurst = 200;
 constexpr std::size_t kMaxWebSockets = 16;
 constexpr std::size_t kWsQueue = 64;
@@ -99,12 +108,20 @@ struct WebServer::Impl : std::enable_shared_from_this<WebServer::Impl> {
   std::set<Session*> sessions;  // I/O thread only
   std::map<asio::ip::address, std::size_t> perAddress;  // open sessions by peer address, I/O thread
   TokenBucket acceptBudget{kAcceptsPerSecond, kAcceptBurst};
+  struct PeerBudget {
+    TokenBucket sessions{kSessionsPerSecondPerAddress, kSessionBurstPerAddress};
+    TokenBucket::Clock::time_point lastUsed{};
+  };
+  std::map<asio::ip::address, PeerBudget> peerBudgets;  // I/O thread, at most kMaxPeerBudgets
+  PeerBudget sharedBudget;                              // addresses beyond those
   std::set<std::shared_ptr<WsSession>> wsSessions;  // I/O thread only
   std::atomic<std::uint64_t> wsClients{0}, wsAccepted{0}, wsDropped{0};
   bool stopped = false;
   std::uint16_t boundPort = 0;
 
   void doAccept();
+  // One more session from `peer` within its budget (kSessionsPerSecondPerAddress).
+  bool takeSession(const asio::ip::address& peer);
 };
 
 class WebServer::Impl::WsSession : public std::enable_shared_from_this<WsSession> {
@@ -356,9 +373,10 @@ void WebServer::Impl::doAccept() {
     const asio::ip::address peer = socket.remote_endpoint(peerEc).address();
     const auto fromPeer = self->perAddress.find(peer);
     if (peerEc || self->sessions.size() >= kMaxConnections ||
-        (fromPeer != self->perAddress.end() && fromPeer->second >= kMaxConnectionsPerAddress)) {
+        (fromPeer != self->perAddress.end() && fromPeer->second >= kMaxConnectionsPerAddress) ||
+        !self->takeSession(peer)) {
       error_code ignored;
-      socket.close(ignored);  // gone already, or over a limit: refuse this one, keep serving the others
+      socket.close(ignored);  // gone already, or over a limit or its rate: refuse this one, serve the others
     } else {
       std::make_shared<Session>(self, std::move(socket), peer)->start();
     }
@@ -371,6 +389,19 @@ void WebServer::Impl::doAccept() {
       if (!rec) self->doAccept();
     });
   });
+}
+
+bool WebServer::Impl::takeSession(const asio::ip::address& peer) {
+  const auto now = TokenBucket::Clock::now();
+  auto it = peerBudgets.find(peer);
+  if (it == peerBudgets.end()) {
+    if (peerBudgets.size() >= kMaxPeerBudgets)
+      std::erase_if(peerBudgets, [now](const auto& kv) { return now - kv.second.lastUsed > kPeerBudgetIdle; });
+    if (peerBudgets.size() < kMaxPeerBudgets) it = peerBudgets.emplace(peer, PeerBudget{}).first;
+  }
+  PeerBudget& b = it == peerBudgets.end() ? sharedBudget : it->second;
+  b.lastUsed = now;
+  return b.sessions.take(now);
 }
 
 WebServer::WebServer(asio::io_context& io, WebOptions options) : impl_(std::make_shared<Impl>(io, std::move(options))) {}
