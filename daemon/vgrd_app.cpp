@@ -162,10 +162,10 @@ struct VgrdApp::Impl {
     for (const auto& robot : robots) {
       const protocol::RobotServerStats st = robot->stats();
       log::info("main",
-                "robot '{}': connections {} accepted, {} closed, {} open; refused {} not allowed, {} full; {} stale "
-                "replaced, {} reset before accept; {} control requests refused; {} log lines held back",
+                "robot '{}': connections {} accepted, {} closed, {} open; refused {} not allowed, {} full, {} over the "
+                "rate; {} stale replaced, {} reset before accept; {} control requests refused; {} log lines held back",
                 robot->endpoint().name, st.accepted, st.closed, robot->clientCount(), st.refusedNotAllowed,
-                st.refusedFull, st.replacedStale, st.goneBeforeAccept, st.controlRefused, st.logLinesHeldBack);
+                st.refusedFull, st.refusedRate, st.replacedStale, st.goneBeforeAccept, st.controlRefused, st.logLinesHeldBack);
     }
     for (const auto& plc : plcs) {
       if (const std::string line = plc->summary(); !line.empty()) log::info("main", "{}", line);

@@ -112,6 +112,27 @@ struct ServerCore : std::enable_shared_from_this<ServerCore> {
   RobotServerStats stats;
   log::LogLimiter connLimiter{kConnLogBurst, kConnLogWindow};
   TokenBucket acceptBudget{kRobotAcceptsPerSecond, kRobotAcceptBurst};
+  // Session budgets of recently seen addresses (at most kMaxPeerBudgets; one unused for a
+  // second is full again and may be forgotten); addresses beyond those share one.
+  struct PeerBudget {
+    TokenBucket sessions{kRobotSessionsPerSecond, kRobotSessionBurst};
+    TokenBucket::Clock::time_point lastUsed{};
+  };
+  static constexpr std::size_t kMaxPeerBudgets = 256;
+  std::map<asio::ip::address, PeerBudget> peerBudgets;
+  PeerBudget sharedBudget;
+  bool takeSession(const asio::ip::address& address) {
+    const auto now = TokenBucket::Clock::now();
+    auto it = peerBudgets.find(address);
+    if (it == peerBudgets.end()) {
+      if (peerBudgets.size() >= kMaxPeerBudgets)
+        std::erase_if(peerBudgets, [now](const auto& kv) { return now - kv.second.lastUsed > std::chrono::seconds(1); });
+      if (peerBudgets.size() < kMaxPeerBudgets) it = peerBudgets.emplace(address, PeerBudget{}).first;
+    }
+    PeerBudget& b = it == peerBudgets.end() ? sharedBudget : it->second;
+    b.lastUsed = now;
+    return b.sessions.take(now);
+  }
   tcp::acceptor acceptor;
   asio::steady_timer retryTimer;
   std::uint16_t boundPort = 0;
@@ -727,6 +748,12 @@ void ServerCore::onAccept(const error_code& ec, tcp::socket socket) {
   if (!allowed(address)) {
     ++stats.refusedNotAllowed;
     connLog(true, "robot '{}': refusing {}: not in allowed_clients", endpoint.name, peer);
+    return refuse();
+  }
+  if (!takeSession(address)) {
+    ++stats.refusedRate;
+    connLog(true, "robot '{}': refusing {}: more than {} new connections a second from its address", endpoint.name,
+            peer, kRobotSessionsPerSecond);
     return refuse();
   }
   std::size_t fromAddress = 0;

@@ -124,12 +124,16 @@ class ReplyFn {
 using RequestHandler = std::function<void(const std::string& robotName, const RobotRequest& req, ReplyFn reply)>;
 
 // What one peer can make the I/O thread do is bounded (docs/robustness.md): an endpoint
-// accepts at most kRobotAcceptsPerSecond new connections (bursts of kRobotAcceptBurst; more
-// wait in the kernel's listen backlog), a connection of a request dialect gets at most
-// kRobotRequestsPerSecond requests served (bursts of kRobotRequestBurst; more wait in its
-// socket). A robot asks a few times a second; a storm or a flood costs a bounded share of
-// the I/O thread instead of all of it.
-inline constexpr double kRobotAcceptsPerSecond = 200, kRobotAcceptBurst = 50;
+// starts at most kRobotSessionsPerSecond sessions per peer address (bursts of
+// kRobotSessionBurst; more are closed as soon as they are accepted), a connection of a
+// request dialect gets at most kRobotRequestsPerSecond requests served (bursts of
+// kRobotRequestBurst; more wait in its socket). A robot asks a few times a second; a storm
+// or a flood costs a bounded share of the I/O thread instead of all of it. The listen
+// backlog is drained at up to kRobotAcceptsPerSecond (an accept and a close cost a few
+// microseconds): what waits there waits for every address, so a storm's leftovers must not
+// stay in it (at 200 accepts/s they kept a reconnecting robot waiting ~17 s).
+inline constexpr double kRobotAcceptsPerSecond = 5000, kRobotAcceptBurst = 500;
+inline constexpr double kRobotSessionsPerSecond = 200, kRobotSessionBurst = 50;
 inline constexpr double kRobotRequestsPerSecond = 2000, kRobotRequestBurst = 200;
 
 // What happened to the endpoint's connections since start() (I/O thread; the 60 s summary).
@@ -139,6 +143,7 @@ struct RobotServerStats {
   std::uint64_t closed = 0;             // accepted connections that ended, for any reason
   std::uint64_t refusedNotAllowed = 0;  // peer not in allowedClients
   std::uint64_t refusedFull = 0;        // endpoint or address full, nothing stale to replace
+  std::uint64_t refusedRate = 0;        // over its address's kRobotSessionsPerSecond
   std::uint64_t replacedStale = 0;      // stale connections closed to make room
   std::uint64_t goneBeforeAccept = 0;   // reset by the peer before it could be looked at
   std::uint64_t controlRefused = 0;     // JOB/TRIG from outside controlClients

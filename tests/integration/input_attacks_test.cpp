@@ -8,13 +8,15 @@
 //   10,000 pipelined requests (read back concurrently: all answered, in order),
 //   more clients than allowed (100 held connections from 19 addresses).
 // Each attack is answered or refused by the rules of its protocol; the good client, already
-// connected, is served on: its p99 during the attack within 2x its idle p99 measured just
-// before (idle taken as at least 1 ms: the scheduler quantum of this loaded 2-core machine;
+// connected, is served on, until the attack has ended, without one failure: its p99 during
+// the attack's first second within 2x its idle p99 measured just before (idle taken as at least 1 ms: the scheduler quantum of this loaded 2-core machine;
 // idle loopback round trips are ~0.1 ms). vgrd and the good client run SCHED_FIFO, the
 // attackers at nice +10 (tests/support/processes.hpp): on this shared machine (load ~20)
 // the other engineers' compilers otherwise make both p99s, idle and attacked, 5-70 ms of
 // scheduler waits that say nothing about vgrd (measured even at nice -10); on its own IPC
-// vgrd has the cores. vgrd's RSS grows by less than 16 MB over all of
+// vgrd has the cores. After each attack a new client is answered within 2 s (before: a
+// storm's ~3400 closed connections in the web and robot ports' listen backlogs, drained at
+// 200 accepts/s, kept every new client waiting ~17 s). vgrd's RSS grows by less than 16 MB over all of
 // it, and its connection log stays bounded (rate-limited: 20 lines per 10 s per server,
 // the rest counted) although thousands of connections came and went.
 // Figures: docs/robustness.md ("Inputs that change nothing").
@@ -44,6 +46,9 @@ using vgr::test::TestSocket;
 using Clock = std::chrono::steady_clock;
 
 constexpr std::chrono::milliseconds kIdle{700}, kAttack{1000};
+// A new client after an attack: connected and answered within this (a browser or a
+// Prometheus scrape waits seconds; a listen backlog of a storm's leftovers took 17 s).
+constexpr std::chrono::milliseconds kNewcomerDeadline{2000};
 
 double percentile(std::vector<double> v, double q) {
   if (v.empty()) return 0;
@@ -107,26 +112,45 @@ class input_attacks : public vgr::test::SimCell {
     double idleP99, p99, maxMs;
     std::size_t n;
     int failures;
+    double newcomerMs;  // < 0: not measured on this port
   };
 
   // Runs every attack against `port` while `probe` measures; records a row per attack.
-  void attackPort(const std::string& portName, const Probe& probe, const std::vector<Attack>& attacks) {
+  // `newcomer`: a client that connects after the attack (a browser opening the page, a
+  // scrape), served within kNewcomerDeadline: what an attack leaves behind (a listen backlog
+  // full of a storm's closed connections) must not keep anyone waiting.
+  void attackPort(const std::string& portName, const Probe& probe, const std::vector<Attack>& attacks,
+                  const Probe& newcomer = nullptr) {
     for (const Attack& a : attacks) {
       const Samples idle = sample(probe, kIdle);
-      ASSERT_EQ(idle.failures, 0) << portName << ": the good client fails without an attack";
-      std::atomic<bool> stop{false};
+      ASSERT_EQ(idle.failures, 0) << portName << " / before " << a.name << ": the good client fails without an attack";
+      std::atomic<bool> stop{false}, ended{false};
       std::thread t([&] {
         attackerPriority();
         a.run(stop);
+        ended = true;
       });
       std::this_thread::sleep_for(150ms);  // under way
-      const Samples during = sample(probe, kAttack);
+      Samples during = sample(probe, kAttack);
       stop = true;
+      // Some attacks end only when they have had all their replies (10,000 pipelined
+      // requests: seconds at 2000/s): the good client is served on meanwhile, as a real one
+      // would be (and does not sit idle past the web port's 10 s keep-alive timeout).
+      for (int sinceStop = 0; !ended; ++sinceStop) {
+        if (probe() < 0) ++during.failures;
+        std::this_thread::sleep_for(sinceStop < 10 ? 1ms : 10ms);
+      }
       t.join();
       if (a.verify) a.verify();
+      double newcomerMs = -1;
+      if (newcomer) {
+        const double ms = newcomerMs = newcomer();
+        EXPECT_GE(ms, 0) << portName << " / after " << a.name << ": a new client is not served";
+        EXPECT_LT(ms, kNewcomerDeadline.count()) << portName << " / after " << a.name << ": a new client waits";
+      }
       const double idleP99 = percentile(idle.ms, 0.99), p99 = percentile(during.ms, 0.99);
       const double maxMs = during.ms.empty() ? 0 : *std::max_element(during.ms.begin(), during.ms.end());
-      rows_.push_back({portName, a.name, idleP99, p99, maxMs, during.ms.size(), during.failures});
+      rows_.push_back({portName, a.name, idleP99, p99, maxMs, during.ms.size(), during.failures, newcomerMs});
       EXPECT_EQ(during.failures, 0) << portName << " / " << a.name;
       EXPECT_GT(during.ms.size(), 50u) << portName << " / " << a.name;
       EXPECT_LE(p99, std::max(2.0 * idleP99, 1.0)) << portName << " / " << a.name << ": idle p99 " << idleP99;
@@ -134,11 +158,11 @@ class input_attacks : public vgr::test::SimCell {
   }
 
   void printRows() const {
-    std::printf("| port | attack | good client idle p99 ms | during p99 ms | during max ms | samples | failed |\n");
-    std::printf("|---|---|---|---|---|---|---|\n");
+    std::printf("| port | attack | good client idle p99 ms | during p99 ms | during max ms | samples | failed | new client after, ms |\n");
+    std::printf("|---|---|---|---|---|---|---|---|\n");
     for (const auto& r : rows_)
-      std::printf("| %s | %s | %.3f | %.3f | %.3f | %zu | %d |\n", r.port.c_str(), r.attack.c_str(), r.idleP99, r.p99,
-                  r.maxMs, r.n, r.failures);
+      std::printf("| %s | %s | %.3f | %.3f | %.3f | %zu | %d | %s |\n", r.port.c_str(), r.attack.c_str(), r.idleP99, r.p99,
+                  r.maxMs, r.n, r.failures, r.newcomerMs < 0 ? "-" : std::to_string(r.newcomerMs).substr(0, 6).c_str());
   }
 
   std::vector<Row> rows_;
@@ -262,7 +286,19 @@ TEST_F(input_attacks, EverySocketInputServesItsGoodClientDuringEachAttack) {
   PortAttacks robotAttacks{static_cast<std::uint16_t>(kUrPort), "GET,1", "JOB,1\n", [](const std::string& s) {
                              return static_cast<std::size_t>(std::count(s.begin(), s.end(), ')'));
                            }};
-  ASSERT_NO_FATAL_FAILURE(attackPort("robot (ur)", robotProbe, attacksOn(robotAttacks, connections)));
+  // A new client after each attack (every port: from 127.0.0.30, an address no attack uses).
+  const auto newcomer = [](int port, std::string request, std::function<bool(TestSocket&)> answered) -> Probe {
+    return [port, request, answered] {
+      const auto t0 = Clock::now();
+      TestSocket fresh(static_cast<std::uint16_t>(port), "127.0.0.30");
+      if (!fresh.connected() || !fresh.send(request) || !answered(fresh)) return -1.0;
+      return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    };
+  };
+  const Probe robotNewcomer = newcomer(kUrPort, "JOB,1\n", [](TestSocket& s) {
+    return s.readUntil(')', 5000ms).rfind("(0,0,", 0) == 0;
+  });
+  ASSERT_NO_FATAL_FAILURE(attackPort("robot (ur)", robotProbe, attacksOn(robotAttacks, connections), robotNewcomer));
 
   // Modbus: FC04 read of STATUS.
   vgr::test::LibmodbusClient plc(static_cast<std::uint16_t>(kModbusPort));
@@ -276,7 +312,10 @@ TEST_F(input_attacks, EverySocketInputServesItsGoodClientDuringEachAttack) {
   const std::string readStatus("\x00\x01\x00\x00\x00\x06\x01\x04\x00\x10\x00\x01", 12);
   PortAttacks modbusAttacks{static_cast<std::uint16_t>(kModbusPort), readStatus.substr(0, 7), readStatus,
                             [](const std::string& s) { return s.size() / 11; }};
-  ASSERT_NO_FATAL_FAILURE(attackPort("modbus", modbusProbe, attacksOn(modbusAttacks, connections)));
+  const Probe modbusNewcomer = newcomer(kModbusPort, readStatus, [](TestSocket& s) {
+    return s.readBytes(11, 5000ms).size() == 11;
+  });
+  ASSERT_NO_FATAL_FAILURE(attackPort("modbus", modbusProbe, attacksOn(modbusAttacks, connections), modbusNewcomer));
 
   // Web: GET /metrics on a keep-alive connection.
   TestSocket web(static_cast<std::uint16_t>(webPort), "127.0.0.1");
@@ -298,7 +337,9 @@ TEST_F(input_attacks, EverySocketInputServesItsGoodClientDuringEachAttack) {
   const std::string pipelined = "GET /nothing-here HTTP/1.1\r\nHost: vgrd\r\n\r\n";
   PortAttacks webAttacks{static_cast<std::uint16_t>(webPort), "GET /metrics HTTP/1.1\r\nX-Slow: ", pipelined,
                          [](const std::string& s) { return countOccurrences(s, "HTTP/1.1 404"); }};
-  ASSERT_NO_FATAL_FAILURE(attackPort("web", webProbe, attacksOn(webAttacks, connections)));
+  const Probe webNewcomer = newcomer(webPort, "GET /metrics HTTP/1.1\r\nHost: vgrd\r\nConnection: close\r\n\r\n",
+                                     [](TestSocket& s) { return s.readUntil('\n', 5000ms).rfind("HTTP/1.1 200", 0) == 0; });
+  ASSERT_NO_FATAL_FAILURE(attackPort("web", webProbe, attacksOn(webAttacks, connections), webNewcomer));
 
   printRows();
   const long rssEnd = rssKb(vgrd_->pid());
