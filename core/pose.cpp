@@ -23,6 +23,13 @@ Pose poseFromXyzRz(double x, double y, double z, double rzRad) {
   return fromEigen({x, y, z}, Eigen::Quaterniond(Eigen::AngleAxisd(rzRad, Eigen::Vector3d::UnitZ())));
 }
 
+Pose poseFromZyxDeg(double x, double y, double z, double rzDeg, double ryDeg, double rxDeg) {
+  const double k = M_PI / 180.0;
+  return fromEigen({x, y, z}, Eigen::Quaterniond(Eigen::AngleAxisd(rzDeg * k, Eigen::Vector3d::UnitZ()) *
+                                                 Eigen::AngleAxisd(ryDeg * k, Eigen::Vector3d::UnitY()) *
+                                                 Eigen::AngleAxisd(rxDeg * k, Eigen::Vector3d::UnitX())));
+}
+
 EulerZyxDeg toEulerZyxDeg(const Pose& p) {
   // R = Rz(a) Ry(b) Rx(c); b = asin(-r20). Near the singularity (|b| = 90 deg) rx is set
   // to 0 and rz absorbs the remaining rotation, so the three angles still rebuild R.

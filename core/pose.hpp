@@ -17,6 +17,10 @@ struct Vec3 {
 // Rotation about the base Z axis by rz radians, at (x, y, z) mm.
 Pose poseFromXyzRz(double x, double y, double z, double rzRad);
 
+// At (x, y, z) mm with R = Rz(rz) * Ry(ry) * Rx(rx), angles in degrees (the Z-Y-X
+// convention below: ABB's OrientZYX(rz, ry, rx), FANUC's W = rx, P = ry, R = rz).
+Pose poseFromZyxDeg(double x, double y, double z, double rzDeg, double ryDeg, double rxDeg);
+
 // Z-Y-X Euler angles in degrees: R = Rz(rz) * Ry(ry) * Rx(rx). This is ABB's
 // OrientZYX(rz, ry, rx) and FANUC's W,P,R (W = rx, P = ry, R = rz).
 struct EulerZyxDeg {

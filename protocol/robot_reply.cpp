@@ -36,6 +36,7 @@ Result<ParsedReply> parseBinaryReply(std::string_view raw) {
   p.yMm = round3(binary::readInt32(raw, 20) / 1000.0);
   p.zMm = round3(binary::readInt32(raw, 24) / 1000.0);
   p.rzDeg = round3(binary::readInt32(raw, 36) / 1000.0);  // r, millidegrees
+  for (std::size_t i = 0; i < 6; ++i) p.values[i] = binary::readInt32(raw, 16 + 4 * i) / 1000.0;
   return p;
 }
 
@@ -99,6 +100,7 @@ Result<ParsedReply> parseTextReply(Dialect dialect, std::string_view raw) {
     if (!(std::abs(v[i]) <= (dialect == Dialect::Ur ? kPi + 1e-6 : 180.0005)))
       return fail(Status::BadArgument, "angle out of range");
   }
+  p.values = v;
   if (dialect == Dialect::Ur) {  // metres + rotation vector; planar case: rz = v.z
     p.xMm = round3(v[0] * 1000.0);
     p.yMm = round3(v[1] * 1000.0);

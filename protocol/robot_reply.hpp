@@ -12,6 +12,7 @@
 // 3 decimals.
 #pragma once
 
+#include <array>
 #include <string_view>
 
 #include "core/result.hpp"
@@ -23,6 +24,10 @@ struct ParsedReply {
   int status = 0;
   long long cycle = 0;
   double xMm = 0, yMm = 0, zMm = 0, rzDeg = 0;
+  // The six pose numbers as the dialect carries them, unrounded (ur: m and a rotation vector
+  // in rad; abb: mm and Z-Y-X degrees; fanuc: mm and W, P, R degrees; binary: mm and
+  // degrees): what a robot program computes its target from (sim/robot/robot_program.hpp).
+  std::array<double, 6> values{};
 };
 
 // The reply, or Status::BadArgument saying what is wrong with it ("does not match the

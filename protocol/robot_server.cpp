@@ -287,7 +287,7 @@ class RequestSession final : public Session {
 
   void deliverAwaited(const RobotReply& reply) override {
     awaitingReply_ = false;
-    writeBytes(formatReply(server_->endpoint.dialect, reply));
+    writeBytes(formatReply(server_->endpoint.dialect, reply, server_->endpoint.replyLabel));
     advance();
   }
 
@@ -361,7 +361,7 @@ class RequestSession final : public Session {
                  item.error().message);
       RobotReply r;
       r.status = item.error().code;
-      writeBytes(formatReply(server_->endpoint.dialect, r));
+      writeBytes(formatReply(server_->endpoint.dialect, r, server_->endpoint.replyLabel));
       return;
     }
     if (!budget_.take()) {  // over the connection's request rate: served when a token comes

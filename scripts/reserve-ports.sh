@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The simulated cell's robot ports 50010-50019 (vgr soak adds 50013, 50014) lie inside Linux's ephemeral port range
+# The simulated cell's robot ports 50010-50019 (vgr soak adds 50013, 50014; 50013 is also
+# the fourth robot of `vgr demo --classes`) lie inside Linux's ephemeral port range
 # (net.ipv4.ip_local_port_range, 32768-60999 on Debian): any outgoing connection on the
 # machine may be given one of them as its local port, and vgrd's bind on it then fails
 # with "Address already in use" although nothing listens there (seen once in CI: four

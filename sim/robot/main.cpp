@@ -10,7 +10,18 @@
 //           the 75-byte fixed-column reply that SUB_STR/CNV_STR_REAL take apart.
 //   binary: the 16-byte VGRQ request; reads exactly 40 bytes (socket_read_binary_integer(10))
 //           and checks magic and length.
+// --reply-label: the endpoint's `reply_label: true` replies (label and confidence after the
+// pose: ur 10 values, abb 2 more fields, fanuc 85 bytes, binary 48 bytes), checked as strictly.
+// --check-order ORDER [--label N] --truth FILE --journal FILE: at the end, whether this robot
+// got exactly the parts its part order says, against the emulator's truth and vgrd's journal
+// (sim/sort_check.hpp); the summary line gets a "check" object, and a failed check exits 1.
 // (`strict` is a push protocol, not a poll: tests/integration/robot_wire_test.cpp plays it.)
+//
+// --program FILE... --config CELL (abb, fanuc, ur): plays an example robot program of
+// examples/robot/ that applies offsets (sim/robot/robot_program.hpp): sends the program's
+// own requests (RAPID's JOB,<n># once per connection, then its GET), and for every OK
+// reply prints where the program would move the tool and which part pose that picks
+// ("part_x_mm" ... in the base frame), for a test to hold against the renderer's truth.
 //
 // Output: one line per reply on stdout (JSON with --json); diagnostics on stderr.
 // A reply that does not come within --timeout-ms counts as invalid (the protocol promises a
@@ -19,13 +30,21 @@
 // the daemon is re-opened (for up to 10 s) and the unanswered request sent again.
 // Exit: 0 all replies valid, 1 any invalid reply, 2 usage or connection failure.
 // Single-threaded: one io_context run by main().
+#if defined(__GNUC__) && !defined(__clang__)
+// GCC 12 reports a false -Wmaybe-uninitialized inside <regex> in sanitizer builds.
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
+
+#include <algorithm>
 #include <array>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstdint>
 #include <iostream>
 #include <optional>
+#include <regex>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -42,9 +61,12 @@
 #include <boost/asio/write.hpp>
 #include <nlohmann/json.hpp>
 
+#include "config/cell_config.hpp"
 #include "core/log.hpp"
 #include "protocol/robot_codec.hpp"
 #include "protocol/robot_reply.hpp"
+#include "sim/robot/robot_program.hpp"
+#include "sim/sort_check.hpp"
 
 namespace {
 
@@ -68,6 +90,12 @@ struct Options {
   int intervalMs = 100;
   int timeoutMs = 3000;
   bool json = false;
+  std::vector<std::string> program;  // --program files
+  std::string config;                // --config: the cell the program's robot is in
+  bool replyLabel = false;
+  std::string checkOrder;  // best_score | by_label | label_only | random; empty = no check
+  int label = 0;           // label_only: the robot's label
+  std::string truthPath, journalPath;
 };
 
 // A reply checked against the dialect (protocol/robot_reply.hpp); the numbers are set only
@@ -78,9 +106,120 @@ struct Parsed {
   int status = 0;
   long long cycle = 0;
   double xMm = 0, yMm = 0, zMm = 0, rzDeg = 0;
+  std::array<double, 6> values{};  // the six pose numbers as the dialect carries them
+  int label = 0;
+  double confidence = 0;
 };
 
-Parsed parseReply(Dialect dialect, const std::string& raw) {
+constexpr double kPi = 3.14159265358979323846;
+
+double round3(double v) {
+  const double r = std::round(v * 1000.0) / 1000.0;
+  return r == 0.0 ? 0.0 : r;  // no -0 in the output
+}
+
+Parsed parseBinary(const std::string& raw, bool withLabel) {
+  namespace bin = vgr::protocol::binary;
+  Parsed p;
+  const std::size_t bytes = withLabel ? bin::kLabelReplyBytes : bin::kReplyBytes;
+  if (raw.size() != bytes || static_cast<std::uint32_t>(bin::readInt32(raw, 0)) != bin::kReplyMagic ||
+      bin::readInt32(raw, 4) != static_cast<std::int32_t>(bytes)) {
+    p.error = fmt::format("not a {}-byte VGRA frame", bytes);
+    return p;
+  }
+  if (withLabel) {
+    p.label = bin::readInt32(raw, 40);
+    p.confidence = bin::readInt32(raw, 44) / 1000.0;
+  }
+  p.status = bin::readInt32(raw, 8);
+  p.cycle = bin::readInt32(raw, 12);
+  p.xMm = round3(bin::readInt32(raw, 16) / 1000.0);  // µm
+  p.yMm = round3(bin::readInt32(raw, 20) / 1000.0);
+  p.zMm = round3(bin::readInt32(raw, 24) / 1000.0);
+  p.rzDeg = round3(bin::readInt32(raw, 36) / 1000.0);  // r, millidegrees
+  for (std::size_t i = 0; i < 6; ++i) p.values[i] = bin::readInt32(raw, 16 + 4 * i) / 1000.0;
+  p.valid = true;
+  return p;
+}
+
+// reply_label replies (label and confidence after the pose; binary: the 48-byte frame).
+Parsed parseLabelledReply(Dialect dialect, const std::string& raw, bool withLabel) {
+  if (dialect == Dialect::Binary) return parseBinary(raw, withLabel);
+  static const std::regex kUr(R"(\(-?\d+,\d+(,-?\d+\.\d{6}){6}\))");
+  static const std::regex kAbb(R"(-?\d+,\d+(,-?\d+\.\d{3}){6})");
+  // Fixed columns: status, cycle, X, Y, Z, W, P, R, CR LF (docs/protocols.md, "fanuc").
+  static const std::regex kFanuc(R"([+-]\d{4},\d{7}(,[+-]\d{5}\.\d{3}){3}(,[+-]\d{3}\.\d{3}){3}\r\n)");
+  // reply_label: label and confidence after the pose.
+  static const std::regex kUrLabel(R"(\(-?\d+,\d+(,-?\d+\.\d{6}){6},\d{1,3},[01]\.\d{3}\))");
+  static const std::regex kAbbLabel(R"(-?\d+,\d+(,-?\d+\.\d{3}){6},\d{1,3},[01]\.\d{3})");
+  static const std::regex kFanucLabel(R"([+-]\d{4},\d{7}(,[+-]\d{5}\.\d{3}){3}(,[+-]\d{3}\.\d{3}){3},\d{3},[01]\.\d{3}\r\n)");
+  const std::regex& re = dialect == Dialect::Ur      ? (withLabel ? kUrLabel : kUr)
+                         : dialect == Dialect::Fanuc ? (withLabel ? kFanucLabel : kFanuc)
+                                                     : (withLabel ? kAbbLabel : kAbb);
+  Parsed p;
+  if (!std::regex_match(raw, re)) {
+    p.error = "does not match the dialect";
+    return p;
+  }
+  if (dialect == Dialect::Abb && raw.size() > vgr::protocol::kAbbMaxReplyChars) {
+    p.error = "longer than 80 characters";
+    return p;
+  }
+  std::string_view body(raw);
+  if (dialect == Dialect::Ur) body = body.substr(1, body.size() - 2);
+  if (dialect == Dialect::Fanuc) body = body.substr(0, body.size() - 2);
+  std::array<double, 8> v{};
+  std::size_t field = 0;
+  const std::size_t fields = withLabel ? 10 : 8;
+  while (field < fields) {
+    const std::size_t comma = body.find(',');
+    std::string_view text = body.substr(0, comma);
+    if (!text.empty() && text.front() == '+') text.remove_prefix(1);  // from_chars takes no '+'
+    std::from_chars_result res{};
+    if (field == 0) {
+      res = std::from_chars(text.data(), text.data() + text.size(), p.status);
+    } else if (field == 1) {
+      res = std::from_chars(text.data(), text.data() + text.size(), p.cycle);
+    } else {
+      res = std::from_chars(text.data(), text.data() + text.size(), v[field - 2]);
+    }
+    if (res.ec != std::errc{}) {
+      p.error = "number out of range";
+      return p;
+    }
+    ++field;
+    if (comma == std::string_view::npos) break;
+    body.remove_prefix(comma + 1);
+  }
+  std::copy(v.begin(), v.begin() + 6, p.values.begin());
+  if (dialect == Dialect::Ur) {  // metres + rotation vector; planar case: rz = v.z
+    p.xMm = round3(v[0] * 1000.0);
+    p.yMm = round3(v[1] * 1000.0);
+    p.zMm = round3(v[2] * 1000.0);
+    p.rzDeg = round3(v[5] * 180.0 / kPi);
+  } else if (dialect == Dialect::Fanuc) {  // mm + W, P, R degrees: rz is R, the last
+    p.xMm = round3(v[0]);
+    p.yMm = round3(v[1]);
+    p.zMm = round3(v[2]);
+    p.rzDeg = round3(v[5]);
+  } else {  // mm + Z-Y-X degrees: rz is the first angle
+    p.xMm = round3(v[0]);
+    p.yMm = round3(v[1]);
+    p.zMm = round3(v[2]);
+    p.rzDeg = round3(v[3]);
+  }
+  if (withLabel) {
+    p.label = static_cast<int>(v[6]);
+    p.confidence = v[7];
+  }
+  p.valid = true;
+  return p;
+}
+
+// A plain reply goes through the strict checker (protocol/robot_reply.hpp, shared with
+// fuzz_robot_reply: vgrd's ranges), a labelled one through parseLabelledReply.
+Parsed parseReply(Dialect dialect, const std::string& raw, bool withLabel) {
+  if (withLabel) return parseLabelledReply(dialect, raw, true);
   Parsed p;
   const vgr::Result<vgr::protocol::ParsedReply> r = vgr::protocol::parseRobotReply(dialect, raw);
   if (!r) {
@@ -94,19 +233,22 @@ Parsed parseReply(Dialect dialect, const std::string& raw) {
   p.yMm = r->yMm;
   p.zMm = r->zMm;
   p.rzDeg = r->rzDeg;
+  p.values = r->values;
   return p;
 }
 
 class SimRobot {
  public:
-  SimRobot(asio::io_context& io, Options opt, Dialect dialect)
-      : io_(io), opt_(std::move(opt)), dialect_(dialect), socket_(io), timer_(io), signals_(io, SIGINT, SIGTERM) {
+  SimRobot(asio::io_context& io, Options opt, Dialect dialect, std::optional<vgr::sim::RobotProgram> program)
+      : io_(io), opt_(std::move(opt)), dialect_(dialect), program_(std::move(program)), socket_(io), timer_(io),
+        signals_(io, SIGINT, SIGTERM) {
     switch (dialect_) {
       case Dialect::Ur: request_ = "GET," + std::to_string(opt_.job) + "\n"; break;
       case Dialect::Fanuc: request_ = "GET," + std::to_string(opt_.job) + "\r\n"; break;
       case Dialect::Binary: request_ = vgr::protocol::binary::encodeRequest(vgr::protocol::binary::kCmdGet, opt_.job); break;
       default: request_ = "GET," + std::to_string(opt_.job) + "#"; break;
     }
+    if (program_) request_ = program_->request;
   }
 
   void start() {
@@ -143,6 +285,7 @@ class SimRobot {
         socket_.set_option(tcp::no_delay(true), optEc);
         vgr::log::info("sim", "{}: connected to {}:{}", opt_.name, opt_.host, opt_.port);
         rx_.clear();
+        setupLeft_ = program_ ? program_->setup.size() : 0;
         exchange();
         return;
       }
@@ -167,7 +310,9 @@ class SimRobot {
     timer_.async_wait([this, id](const error_code& ec) {
       if (!ec && id == exchangeId_) onTimeout();
     });
-    asio::async_write(socket_, asio::buffer(request_), [this, id](const error_code& ec, std::size_t) {
+    // A program's setup requests (RAPID: JOB,<n>#) go first on every connection.
+    const std::string& request = setupLeft_ > 0 ? program_->setup[program_->setup.size() - setupLeft_] : request_;
+    asio::async_write(socket_, asio::buffer(request), [this, id](const error_code& ec, std::size_t) {
       if (id != exchangeId_ || done_) return;
       if (ec) {
         connectionLost(ec);
@@ -195,7 +340,10 @@ class SimRobot {
   // Bytes of rx_ that make one complete reply, or 0 while incomplete: ur up to ')' like
   // socket_read_ascii_float, fanuc up to CR LF like KAREL's READ, binary 40 bytes.
   std::size_t frameLength() const {
-    if (dialect_ == Dialect::Binary) return rx_.size() >= vgr::protocol::binary::kReplyBytes ? vgr::protocol::binary::kReplyBytes : 0;
+    if (dialect_ == Dialect::Binary) {
+      const std::size_t bytes = opt_.replyLabel ? vgr::protocol::binary::kLabelReplyBytes : vgr::protocol::binary::kReplyBytes;
+      return rx_.size() >= bytes ? bytes : 0;
+    }
     const std::string_view end = dialect_ == Dialect::Ur ? ")" : "\r\n";
     const std::size_t at = rx_.find(end);
     return at == std::string::npos ? 0 : at + end.size();
@@ -237,6 +385,18 @@ class SimRobot {
 
   void replied(const std::string& raw) {
     retire();
+    if (setupLeft_ > 0) {
+      // The answer to a setup request: status 0 or the program stops (RAPID: Stop).
+      --setupLeft_;
+      const Parsed p = parseReply(dialect_, raw, opt_.replyLabel);
+      if (!p.valid || p.status != 0) {
+        std::cerr << "vgr-sim-robot: " << opt_.name << ": setup request refused: " << raw << "\n";
+        finish(1);
+        return;
+      }
+      exchange();
+      return;
+    }
     record(raw, {});
     next();
   }
@@ -297,13 +457,14 @@ class SimRobot {
     ++replies_;
     Parsed p;
     if (failure.empty()) {
-      p = parseReply(dialect_, rawBytes);
+      p = parseReply(dialect_, rawBytes, opt_.replyLabel);
     } else {
       p.error = failure;
     }
     if (p.valid) {
       ++valid_;
       if (p.status == 0) ++ok_;
+      got_.push_back({p.status, static_cast<std::uint32_t>(p.cycle), p.xMm, p.yMm, p.label, p.confidence});
     } else {
       ++invalid_;
     }
@@ -320,10 +481,26 @@ class SimRobot {
         line["y_mm"] = p.yMm;
         line["z_mm"] = p.zMm;
         line["rz_deg"] = p.rzDeg;
+        if (opt_.replyLabel) {
+          line["label"] = p.label;
+          line["confidence"] = p.confidence;
+        }
       } else {
         line["error"] = p.error;
       }
       line["raw"] = raw;
+      if (p.valid && p.status == 0 && program_) {
+        // Where the program moves the tool, and the part that picks (base frame).
+        const vgr::Pose tool = program_->tcp(p.values);
+        const vgr::Pose part = vgr::compose(tool, vgr::inverse(program_->grip));
+        const auto e = vgr::toEulerZyxDeg(part);
+        line["part_x_mm"] = part.x;
+        line["part_y_mm"] = part.y;
+        line["part_z_mm"] = part.z;
+        line["part_rz_deg"] = e.rz;
+        line["part_ry_deg"] = e.ry;
+        line["part_rx_deg"] = e.rx;
+      }
       std::cout << line.dump(-1, ' ', false, Json::error_handler_t::replace) << std::endl;
     } else if (p.valid) {
       std::cout << fmt::format("{} #{} valid status={} cycle={} x={:.3f} y={:.3f} z={:.3f} rz={:.3f} raw={}", opt_.name,
@@ -345,8 +522,14 @@ class SimRobot {
     summary["invalid"] = invalid_;
     summary["ok"] = ok_;
     summary["reconnects"] = reconnects_;
+    bool checkFailed = false;
+    if (!opt_.checkOrder.empty()) {
+      Json check = orderCheck();
+      checkFailed = !check.value("ok", false);
+      summary["check"] = std::move(check);
+    }
     std::cout << summary.dump() << std::endl;
-    exitCode_ = forcedCode >= 0 ? forcedCode : (invalid_ > 0 ? 1 : 0);
+    exitCode_ = forcedCode >= 0 ? forcedCode : ((invalid_ > 0 || checkFailed) ? 1 : 0);
     error_code ignored;
     socket_.close(ignored);
     timer_.cancel();
@@ -354,9 +537,45 @@ class SimRobot {
     io_.stop();
   }
 
+  // --check-order: the replies against the truth and the journal (sim/sort_check.hpp).
+  Json orderCheck() const {
+    using vgr::config::PartOrder;
+    const PartOrder order = opt_.checkOrder == "by_label"     ? PartOrder::ByLabel
+                            : opt_.checkOrder == "label_only" ? PartOrder::LabelOnly
+                            : opt_.checkOrder == "random"     ? PartOrder::Random
+                                                              : PartOrder::BestScore;
+    Json j;
+    j["order"] = opt_.checkOrder;
+    if (order == PartOrder::LabelOnly) j["label"] = opt_.label;
+    auto truth = vgr::sim::readTruthFile(opt_.truthPath);
+    auto journal = vgr::sim::readJournalFile(opt_.journalPath, opt_.job);
+    if (!truth || !journal) {
+      j["ok"] = false;
+      j["problem"] = !truth ? truth.error().message : journal.error().message;
+      return j;
+    }
+    const vgr::sim::SortCheck c = vgr::sim::checkSorting(order, opt_.label, *truth, *journal, got_);
+    j["ok"] = c.ok();
+    j["cycles"] = c.cycles;
+    j["unseen"] = c.unseen;
+    j["expected"] = c.expected;
+    j["delivered"] = c.delivered;
+    j["missed"] = c.missed;
+    j["wrong_label"] = c.wrongLabel;
+    j["extra"] = c.extra;
+    j["duplicates"] = c.duplicates;
+    j["out_of_order"] = c.outOfOrder;
+    j["missing_no_part"] = c.missingNoPart;
+    j["max_pos_err_mm"] = round3(c.maxPosErrMm);
+    if (!c.firstProblem.empty()) j["problem"] = c.firstProblem;
+    return j;
+  }
+
   asio::io_context& io_;
   const Options opt_;
   const Dialect dialect_;
+  const std::optional<vgr::sim::RobotProgram> program_;
+  std::size_t setupLeft_ = 0;  // setup requests still to send on this connection
   tcp::socket socket_;
   asio::steady_timer timer_;  // connect retry, reply timeout, interval: one at a time
   asio::signal_set signals_;
@@ -368,6 +587,7 @@ class SimRobot {
   std::array<char, vgr::protocol::kAbbMaxReplyChars> abbBuf_{};  // abb: one SocketReceive
   std::uint64_t exchangeId_ = 0;                                 // bumps retire the callbacks of a finished exchange
   std::uint64_t replies_ = 0, valid_ = 0, invalid_ = 0, ok_ = 0, reconnects_ = 0;
+  std::vector<vgr::sim::RobotGot> got_;  // every valid reply, for --check-order
   bool done_ = false;
   int exitCode_ = 0;
 };
@@ -389,14 +609,46 @@ int main(int argc, char** argv) {
   app.add_option("--timeout-ms", opt.timeoutMs, "read timeout per reply")
       ->check(CLI::Range(1, 3600000));
   app.add_flag("--json", opt.json, "one JSON object per line");
+  app.add_option("--program", opt.program, "play this robot program of examples/robot/ (fanuc: vgr_bg.kl and VGR_PICK.ls)");
+  app.add_option("--config", opt.config, "with --program: the cell config the robot (--name) is in");
+  app.add_flag("--reply-label", opt.replyLabel, "replies carry label and confidence (the endpoint's reply_label: true)");
+  auto* check = app.add_option("--check-order", opt.checkOrder,
+                               "at the end, check the parts got against --truth and --journal for this part order")
+                    ->check(CLI::IsMember({"best_score", "by_label", "label_only", "random"}));
+  app.add_option("--label", opt.label, "label_only: the robot's label")->check(CLI::Range(0, 32767));
+  app.add_option("--truth", opt.truthPath, "the camera emulator's truth.jsonl (--check-order)");
+  app.add_option("--journal", opt.journalPath, "vgrd's journal (--check-order)");
   if (const auto rc = vgr::cli::parse(app, argc, argv)) return *rc;
+  if (check->count() > 0 && (opt.truthPath.empty() || opt.journalPath.empty() || !opt.replyLabel)) {
+    std::cerr << "vgr-sim-robot: --check-order needs --truth, --journal and --reply-label\n";
+    return 2;
+  }
   const std::optional<Dialect> dialect = vgr::protocol::parseDialect(opt.dialect);
   if (!dialect) return 2;  // unreachable: checked by CLI11
   if (opt.name.empty()) opt.name = opt.dialect;
+  std::optional<vgr::sim::RobotProgram> program;
+  if (!opt.program.empty()) {
+    if (opt.config.empty()) {
+      std::cerr << "vgr-sim-robot: --program needs --config (the cell whose robot --name it plays)\n";
+      return 2;
+    }
+    auto cell = vgr::config::loadCellConfig(opt.config);
+    if (!cell) {
+      std::cerr << "vgr-sim-robot: " << cell.error().message << "\n";
+      return 2;
+    }
+    auto p = vgr::sim::loadRobotProgram(opt.program, *dialect, *cell, opt.name);
+    if (!p) {
+      std::cerr << "vgr-sim-robot: " << p.error().message << "\n";
+      return 2;
+    }
+    vgr::log::info("sim", "{}: playing {}", opt.name, p->summary);
+    program = std::move(*p);
+  }
 
   try {
     asio::io_context io;
-    SimRobot robot(io, opt, *dialect);
+    SimRobot robot(io, opt, *dialect, std::move(program));
     robot.start();
     io.run();
     return robot.exitCode();
