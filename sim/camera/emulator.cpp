@@ -159,6 +159,13 @@ bool CameraEmulator::pulseLine() {
   return true;
 }
 
+void CameraEmulator::setLossRatio(double ratio) {
+  if (!impl_->camera || !(ratio >= 0.0 && ratio <= 1.0)) return;
+  // Aravis' fake camera thread reads the ratio for every packet it sends.
+  g_object_set(impl_->camera, "gvsp-lost-ratio", ratio, nullptr);
+  log::info("sim", "camera emulator {}: packet loss now {}", impl_->options.serial, ratio);
+}
+
 Result<void> CameraEmulator::start() {
   const auto& o = impl_->options;
   if (!(o.lossRatio >= 0.0 && o.lossRatio <= 1.0))

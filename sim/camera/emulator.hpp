@@ -44,6 +44,8 @@ class CameraEmulator {
   // TriggerMode=On, TriggerSource=Line0; otherwise ignored (as a real camera). Returns
   // whether the camera was armed for it. Any thread.
   bool pulseLine();
+  // GVSP packet loss from now on, [0, 1] (fault injection: `vgr soak`). Any thread.
+  void setLossRatio(double ratio);
 
  private:
   struct Impl;

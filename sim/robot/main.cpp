@@ -64,6 +64,7 @@
 #include "config/cell_config.hpp"
 #include "core/log.hpp"
 #include "protocol/robot_codec.hpp"
+#include "protocol/robot_reply.hpp"
 #include "sim/robot/robot_program.hpp"
 #include "sim/sort_check.hpp"
 
@@ -78,7 +79,6 @@ using vgr::protocol::Dialect;
 constexpr auto kConnectWindow = std::chrono::seconds(10);
 constexpr auto kConnectRetryDelay = std::chrono::milliseconds(200);
 constexpr std::size_t kMaxReplyBytes = 1024;  // ur/fanuc: give up looking for the end after this
-constexpr double kPi = 3.14159265358979323846;
 
 struct Options {
   std::string dialect;
@@ -98,7 +98,8 @@ struct Options {
   std::string truthPath, journalPath;
 };
 
-// A reply checked against the dialect; the numbers are set only when valid.
+// A reply checked against the dialect (protocol/robot_reply.hpp); the numbers are set only
+// when valid.
 struct Parsed {
   bool valid = false;
   std::string error;
@@ -109,6 +110,8 @@ struct Parsed {
   int label = 0;
   double confidence = 0;
 };
+
+constexpr double kPi = 3.14159265358979323846;
 
 double round3(double v) {
   const double r = std::round(v * 1000.0) / 1000.0;
@@ -139,7 +142,8 @@ Parsed parseBinary(const std::string& raw, bool withLabel) {
   return p;
 }
 
-Parsed parseReply(Dialect dialect, const std::string& raw, bool withLabel) {
+// reply_label replies (label and confidence after the pose; binary: the 48-byte frame).
+Parsed parseLabelledReply(Dialect dialect, const std::string& raw, bool withLabel) {
   if (dialect == Dialect::Binary) return parseBinary(raw, withLabel);
   static const std::regex kUr(R"(\(-?\d+,\d+(,-?\d+\.\d{6}){6}\))");
   static const std::regex kAbb(R"(-?\d+,\d+(,-?\d+\.\d{3}){6})");
@@ -209,6 +213,27 @@ Parsed parseReply(Dialect dialect, const std::string& raw, bool withLabel) {
     p.confidence = v[7];
   }
   p.valid = true;
+  return p;
+}
+
+// A plain reply goes through the strict checker (protocol/robot_reply.hpp, shared with
+// fuzz_robot_reply: vgrd's ranges), a labelled one through parseLabelledReply.
+Parsed parseReply(Dialect dialect, const std::string& raw, bool withLabel) {
+  if (withLabel) return parseLabelledReply(dialect, raw, true);
+  Parsed p;
+  const vgr::Result<vgr::protocol::ParsedReply> r = vgr::protocol::parseRobotReply(dialect, raw);
+  if (!r) {
+    p.error = r.error().message;
+    return p;
+  }
+  p.valid = true;
+  p.status = r->status;
+  p.cycle = r->cycle;
+  p.xMm = r->xMm;
+  p.yMm = r->yMm;
+  p.zMm = r->zMm;
+  p.rzDeg = r->rzDeg;
+  p.values = r->values;
   return p;
 }
 

@@ -1,0 +1,124 @@
+#if defined(__GNUC__) && !defined(__clang__)
+// GCC 12 reports a false -Wmaybe-uninitialized inside <regex> in sanitizer builds.
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
+
+#include "protocol/robot_reply.hpp"
+
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <regex>
+#include <string>
+
+#include "core/cycle.hpp"
+#include "protocol/robot_codec.hpp"
+
+namespace vgr::protocol {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+double round3(double v) {
+  const double r = std::round(v * 1000.0) / 1000.0;
+  return r == 0.0 ? 0.0 : r;  // no -0
+}
+
+Result<ParsedReply> parseBinaryReply(std::string_view raw) {
+  if (raw.size() != binary::kReplyBytes || static_cast<std::uint32_t>(binary::readInt32(raw, 0)) != binary::kReplyMagic ||
+      binary::readInt32(raw, 4) != static_cast<std::int32_t>(binary::kReplyBytes))
+    return fail(Status::BadArgument, "not a 40-byte VGRA frame");
+  ParsedReply p;
+  p.status = binary::readInt32(raw, 8);
+  p.cycle = binary::readInt32(raw, 12);
+  p.xMm = round3(binary::readInt32(raw, 16) / 1000.0);  // µm
+  p.yMm = round3(binary::readInt32(raw, 20) / 1000.0);
+  p.zMm = round3(binary::readInt32(raw, 24) / 1000.0);
+  p.rzDeg = round3(binary::readInt32(raw, 36) / 1000.0);  // r, millidegrees
+  for (std::size_t i = 0; i < 6; ++i) p.values[i] = binary::readInt32(raw, 16 + 4 * i) / 1000.0;
+  return p;
+}
+
+// What vgrd sends lies in these ranges; anything else is not a reply of vgrd's (found by
+// fuzz_robot_reply: a binary reply with a negative cycle passed, and a ur reply with a
+// 200-digit x that became infinite in mm). Cycle ids in [0, kMaxCycleId] (0: no cycle),
+// statuses in [-99, 99], positions within kMaxAbsPositionMm, angles within 180 degrees
+// (ur: a rotation vector's components within pi).
+Result<ParsedReply> checkCycle(Result<ParsedReply> r) {
+  if (!r) return r;
+  if (r->cycle < 0 || r->cycle > static_cast<long long>(kMaxCycleId))
+    return fail(Status::BadArgument, "cycle id out of range [0, 2^23 - 1]");
+  if (r->status < -99 || r->status > 99) return fail(Status::BadArgument, "status out of range [-99, 99]");
+  for (const double mm : {r->xMm, r->yMm, r->zMm})
+    if (!(std::abs(mm) <= kMaxAbsPositionMm + 0.0005)) return fail(Status::BadArgument, "position out of range");
+  if (!(std::abs(r->rzDeg) <= 180.0005)) return fail(Status::BadArgument, "angle out of range");
+  return r;
+}
+
+Result<ParsedReply> parseTextReply(Dialect dialect, std::string_view raw);
+
+}  // namespace
+
+Result<ParsedReply> parseRobotReply(Dialect dialect, std::string_view raw) {
+  if (dialect == Dialect::Binary) return checkCycle(parseBinaryReply(raw));
+  return checkCycle(parseTextReply(dialect, raw));
+}
+
+namespace {
+
+Result<ParsedReply> parseTextReply(Dialect dialect, std::string_view raw) {
+  if (dialect == Dialect::Strict) return fail(Status::BadArgument, "the strict dialect has no replies");
+  static const std::regex kUr(R"(\(-?\d+,\d+(,-?\d+\.\d{6}){6}\))");
+  static const std::regex kAbb(R"(-?\d+,\d+(,-?\d+\.\d{3}){6})");
+  // Fixed columns: status, cycle, X, Y, Z, W, P, R, CR LF (docs/protocols.md, "fanuc").
+  static const std::regex kFanuc(R"([+-]\d{4},\d{7}(,[+-]\d{5}\.\d{3}){3}(,[+-]\d{3}\.\d{3}){3}\r\n)");
+  const std::regex& re = dialect == Dialect::Ur ? kUr : dialect == Dialect::Fanuc ? kFanuc : kAbb;
+  if (!std::regex_match(raw.begin(), raw.end(), re)) return fail(Status::BadArgument, "does not match the dialect");
+  if (dialect == Dialect::Abb && raw.size() > kAbbMaxReplyChars) return fail(Status::BadArgument, "longer than 80 characters");
+  std::string_view body(raw);
+  if (dialect == Dialect::Ur) body = body.substr(1, body.size() - 2);
+  if (dialect == Dialect::Fanuc) body = body.substr(0, body.size() - 2);
+  ParsedReply p;
+  std::array<double, 6> v{};
+  for (std::size_t field = 0; field < 8; ++field) {
+    const std::size_t comma = body.find(',');
+    std::string_view text = body.substr(0, comma);
+    if (!text.empty() && text.front() == '+') text.remove_prefix(1);  // from_chars takes no '+'
+    std::from_chars_result res{};
+    if (field == 0)
+      res = std::from_chars(text.data(), text.data() + text.size(), p.status);
+    else if (field == 1)
+      res = std::from_chars(text.data(), text.data() + text.size(), p.cycle);
+    else
+      res = std::from_chars(text.data(), text.data() + text.size(), v[field - 2]);
+    if (res.ec != std::errc{}) return fail(Status::BadArgument, "number out of range");
+    if (comma == std::string_view::npos) break;
+    body.remove_prefix(comma + 1);
+  }
+  for (std::size_t i = 3; i < 6; ++i) {  // ur: a rotation vector (rad); abb, fanuc: degrees
+    if (!(std::abs(v[i]) <= (dialect == Dialect::Ur ? kPi + 1e-6 : 180.0005)))
+      return fail(Status::BadArgument, "angle out of range");
+  }
+  p.values = v;
+  if (dialect == Dialect::Ur) {  // metres + rotation vector; planar case: rz = v.z
+    p.xMm = round3(v[0] * 1000.0);
+    p.yMm = round3(v[1] * 1000.0);
+    p.zMm = round3(v[2] * 1000.0);
+    p.rzDeg = round3(v[5] * 180.0 / kPi);
+  } else if (dialect == Dialect::Fanuc) {  // mm + W, P, R degrees: rz is R, the last
+    p.xMm = round3(v[0]);
+    p.yMm = round3(v[1]);
+    p.zMm = round3(v[2]);
+    p.rzDeg = round3(v[5]);
+  } else {  // abb: mm + Z-Y-X degrees: rz is the first angle
+    p.xMm = round3(v[0]);
+    p.yMm = round3(v[1]);
+    p.zMm = round3(v[2]);
+    p.rzDeg = round3(v[3]);
+  }
+  return p;
+}
+
+}  // namespace
+}  // namespace vgr::protocol
