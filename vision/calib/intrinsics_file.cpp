@@ -1,5 +1,6 @@
 #include "vision/calib/intrinsics.hpp"
 
+#include <cmath>
 #include <filesystem>
 
 #include <fmt/core.h>
@@ -65,6 +66,14 @@ Result<CameraIntrinsics> readIntrinsics(const std::string& path) {
   } catch (const cv::Exception& e) {
     return fail(Status::NotCalibrated, fmt::format("{}: {}", path, e.what()));
   }
+  // A number too large for a double (1e+2607) reads as infinite: refused like a missing one
+  // (found by fuzz_calib_files: an infinite cx loaded).
+  for (int i = 0; i < 9; ++i)
+    if (!std::isfinite(cam.cameraMatrix.val[i]))
+      return fail(Status::NotCalibrated, fmt::format("{}: key 'camera_matrix': value {} is not a finite number", path, i + 1));
+  for (int i = 0; i < 5; ++i)
+    if (!std::isfinite(cam.dist[i]))
+      return fail(Status::NotCalibrated, fmt::format("{}: key 'distortion_coefficients': value {} is not a finite number", path, i + 1));
   if (!(cam.fx() > 0 && cam.fy() > 0) || cam.imageSize.width <= 0 || cam.imageSize.height <= 0)
     return fail(Status::NotCalibrated, fmt::format("{}: focal lengths and image size must be positive", path));
   return cam;
