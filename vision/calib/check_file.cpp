@@ -1,5 +1,6 @@
 #include "vision/calib/check_file.hpp"
 
+#include <exception>
 #include <cmath>
 #include <filesystem>
 
@@ -65,7 +66,7 @@ Result<CheckFile> readCheckFile(const std::string& path) {
     if (!c.fiducial.present && !c.part.present) throw Bad{"neither 'fiducial' nor 'part': nothing to check"};
   } catch (const Bad& b) {
     return fail(Status::NotCalibrated, fmt::format("{}: {}", path, b.message));
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {  // cv::Exception, and what FileStorage lets through (std::length_error)
     return fail(Status::NotCalibrated, fmt::format("{}: {}", path, e.what()));
   }
   return c;
@@ -93,7 +94,7 @@ Result<void> writeCheckFile(const std::string& path, const CheckFile& c) {
          << c.part.rzDeg;
       fs << "}";
     }
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {  // cv::Exception, and what FileStorage lets through (std::length_error)
     return fail(Status::BadArgument, fmt::format("{}: {}", path, e.what()));
   }
   return {};

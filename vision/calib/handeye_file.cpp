@@ -1,5 +1,6 @@
 #include "vision/calib/handeye.hpp"
 
+#include <exception>
 #include <filesystem>
 
 #include <Eigen/Geometry>
@@ -32,7 +33,7 @@ Result<void> writeHandEyeTruth(const std::string& path, HandEyeConfig config, co
     if (!f.isOpened()) return fail(Status::BadArgument, fmt::format("{}: cannot open for writing", path));
     f << "calibration_kind" << "handeye_truth" << "configuration" << handEyeConfigName(config);
     f << "x" << homogeneous(x) << "y" << homogeneous(y) << "method" << "truth";
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {  // cv::Exception, and what FileStorage lets through (std::length_error)
     return fail(Status::BadArgument, fmt::format("{}: {}", path, e.what()));
   }
   return {};
@@ -56,7 +57,7 @@ Result<void> writeHandEye(const std::string& path, const HandEyeResult& r) {
       fs << "{" << "method" << m.method << "valid" << (m.valid ? 1 : 0) << "trans_resid_mm" << m.transResidMm
          << "rot_resid_deg" << m.rotResidDeg << "reproj_rms_px" << m.reprojRmsPx << "note" << m.note << "}";
     fs << "]";
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {  // cv::Exception, and what FileStorage lets through (std::length_error)
     return fail(Status::BadArgument, fmt::format("{}: {}", path, e.what()));
   }
   return {};
@@ -89,7 +90,7 @@ Result<HandEyeFile> readHandEye(const std::string& path) {
     f.transResidMm = static_cast<double>(fs["trans_resid_mm"]);
     f.rotResidDeg = static_cast<double>(fs["rot_resid_deg"]);
     f.reprojRmsPx = static_cast<double>(fs["reproj_rms_px"]);
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {  // cv::Exception, and what FileStorage lets through (std::length_error)
     return fail(Status::NotCalibrated, fmt::format("{}: {}", path, e.what()));
   }
   return f;

@@ -1,5 +1,6 @@
 #include "vision/calib/intrinsics.hpp"
 
+#include <exception>
 #include <cmath>
 #include <filesystem>
 
@@ -25,7 +26,7 @@ Result<void> writeIntrinsics(const std::string& path, const CameraIntrinsics& ca
     for (const auto& v : cam.views)
       fs << "{" << "name" << v.name << "rms_px" << v.rmsPx << "tilt_deg" << v.tiltDeg << "used" << (v.used ? 1 : 0) << "}";
     fs << "]";
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {  // cv::Exception, and what FileStorage lets through (std::length_error)
     return fail(Status::BadArgument, fmt::format("{}: {}", path, e.what()));
   }
   return {};
@@ -63,7 +64,7 @@ Result<CameraIntrinsics> readIntrinsics(const std::string& path) {
     for (const auto& n : views)
       cam.views.push_back({static_cast<std::string>(n["name"]), static_cast<double>(n["rms_px"]),
                            static_cast<double>(n["tilt_deg"]), static_cast<int>(n["used"]) != 0});
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {  // cv::Exception, and what FileStorage lets through (std::length_error)
     return fail(Status::NotCalibrated, fmt::format("{}: {}", path, e.what()));
   }
   // A number too large for a double (1e+2607) reads as infinite: refused like a missing one

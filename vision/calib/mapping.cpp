@@ -1,5 +1,6 @@
 #include "vision/calib/mapping.hpp"
 
+#include <exception>
 #include <cmath>
 #include <filesystem>
 
@@ -99,7 +100,7 @@ Result<void> writeWorkPlane(const std::string& path, const WorkPlane& plane, con
     fs << "point_mm" << cv::Vec3d(plane.point.x, plane.point.y, plane.point.z);
     fs << "normal" << cv::Vec3d(plane.normal.x, plane.normal.y, plane.normal.z);
     fs << "fit_rms_mm" << plane.fitRmsMm;
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {  // cv::Exception, and what FileStorage lets through (std::length_error)
     return fail(Status::BadArgument, fmt::format("{}: {}", path, e.what()));
   }
   return {};
@@ -122,7 +123,7 @@ Result<WorkPlane> readWorkPlane(const std::string& path) {
     p.point = {pt[0], pt[1], pt[2]};
     p.normal = {n[0] / len, n[1] / len, n[2] / len};
     p.fitRmsMm = static_cast<double>(fs["fit_rms_mm"]);
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {  // cv::Exception, and what FileStorage lets through (std::length_error)
     return fail(Status::NotCalibrated, fmt::format("{}: {}", path, e.what()));
   }
   return p;

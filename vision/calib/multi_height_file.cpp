@@ -1,5 +1,6 @@
 #include "vision/calib/multi_height_file.hpp"
 
+#include <exception>
 #include <cmath>
 #include <filesystem>
 
@@ -54,7 +55,7 @@ Result<void> writeMultiHeight(const std::string& path, const MultiHeightSamples&
     }
     fs << "]";
     fs << "fit_rms_px" << fit.rmsPx << "fit_max_px" << fit.maxPx;
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {  // cv::Exception, and what FileStorage lets through (std::length_error)
     return fail(Status::BadArgument, fmt::format("{}: {}", path, e.what()));
   }
   return {};
@@ -99,7 +100,7 @@ Result<MultiHeightCalibration> readMultiHeight(const std::string& path, double m
       for (std::size_t i = 0; i < n; ++i) plane.push_back({uv[2 * i], uv[2 * i + 1]});
       s.image.push_back(std::move(plane));
     }
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {  // cv::Exception, and what FileStorage lets through (std::length_error)
     return fail(Status::NotCalibrated, fmt::format("{}: {}", path, e.what()));
   }
   for (double h : s.heights)
