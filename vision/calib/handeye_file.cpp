@@ -7,6 +7,7 @@
 #include <fmt/core.h>
 #include <opencv2/core/persistence.hpp>
 
+#include "vision/calib/file_matrix.hpp"
 #include "vision/calib/se3.hpp"
 
 // handeye.yaml and the synthetic sets' truth.yaml (same layout): written and read here only.
@@ -75,9 +76,8 @@ Result<HandEyeFile> readHandEye(const std::string& path) {
     else return fail(Status::NotCalibrated, fmt::format("{}: key 'configuration': expected eye-in-hand or eye-to-hand, got '{}'", path, cfg));
     for (const char* key : {"x", "y"}) {
       cv::Mat m;
-      fs[key] >> m;
-      if (m.rows != 4 || m.cols != 4) return fail(Status::NotCalibrated, fmt::format("{}: key '{}': missing or not 4x4", path, key));
-      m.convertTo(m, CV_64F);
+      if (!readSmallMatrix(fs[key], 4, 4, m))
+        return fail(Status::NotCalibrated, fmt::format("{}: key '{}': missing or not 4x4", path, key));
       Iso t = Iso::Identity();
       for (int i = 0; i < 3; ++i) {
         for (int j = 0; j < 3; ++j) t.linear()(i, j) = m.at<double>(i, j);

@@ -1,11 +1,13 @@
 #include "vision/calib/intrinsics.hpp"
 
-#include <exception>
 #include <cmath>
+#include <exception>
 #include <filesystem>
 
 #include <fmt/core.h>
 #include <opencv2/core/persistence.hpp>
+
+#include "vision/calib/file_matrix.hpp"
 
 // intrinsics.yaml (and a synthetic set's camera_truth.yaml, same layout): written and read
 // here only.
@@ -39,14 +41,10 @@ Result<CameraIntrinsics> readIntrinsics(const std::string& path) {
     cv::FileStorage fs(path, cv::FileStorage::READ);
     if (!fs.isOpened()) return fail(Status::NotCalibrated, fmt::format("{}: cannot open intrinsics file", path));
     cv::Mat k, d;
-    fs["camera_matrix"] >> k;
-    fs["distortion_coefficients"] >> d;
-    if (k.rows != 3 || k.cols != 3)
+    if (!readSmallMatrix(fs["camera_matrix"], 3, 3, k))
       return fail(Status::NotCalibrated, fmt::format("{}: key 'camera_matrix': missing or not 3x3", path));
-    if (d.total() != 5)
+    if (!readSmallMatrix(fs["distortion_coefficients"], 5, 1, d) && !readSmallMatrix(fs["distortion_coefficients"], 1, 5, d))
       return fail(Status::NotCalibrated, fmt::format("{}: key 'distortion_coefficients': expected 5 values", path));
-    k.convertTo(k, CV_64F);
-    d.convertTo(d, CV_64F);
     cam.cameraMatrix = cv::Matx33d(k);
     for (int i = 0; i < 5; ++i) cam.dist[i] = d.at<double>(i);
     cam.imageSize = cv::Size(static_cast<int>(fs["image_width"]), static_cast<int>(fs["image_height"]));
@@ -54,9 +52,7 @@ Result<CameraIntrinsics> readIntrinsics(const std::string& path) {
     if (!fs["tangential_distortion"].empty()) cam.tangential = static_cast<int>(fs["tangential_distortion"]) != 0;
     if (!fs["std_dev_intrinsics"].empty()) {
       cv::Mat sdm;
-      fs["std_dev_intrinsics"] >> sdm;
-      if (sdm.total() == 9) {
-        sdm.convertTo(sdm, CV_64F);
+      if (readSmallMatrix(fs["std_dev_intrinsics"], 9, 1, sdm)) {
         for (int i = 0; i < 9; ++i) cam.stdDev[i] = sdm.at<double>(i);
       }
     }
