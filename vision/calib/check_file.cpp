@@ -1,4 +1,5 @@
 #include "vision/calib/check_file.hpp"
+#include "vision/calib/file_matrix.hpp"
 
 #include <exception>
 #include <cmath>
@@ -29,6 +30,7 @@ Result<CheckFile> readCheckFile(const std::string& path) {
   if (!std::filesystem::exists(path)) return fail(Status::NotCalibrated, fmt::format("{}: no such check file", path));
   CheckFile c;
   try {
+    requireYamlText(path);
     cv::FileStorage fs(path, cv::FileStorage::READ);
     if (!fs.isOpened()) return fail(Status::NotCalibrated, fmt::format("{}: cannot read it as OpenCV YAML", path));
     const cv::FileNode root = fs.root();

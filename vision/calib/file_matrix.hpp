@@ -6,6 +6,10 @@
 // Thread: any (no state).
 #pragma once
 
+#include <fstream>
+#include <stdexcept>
+#include <string>
+
 #include <opencv2/core/mat.hpp>
 #include <opencv2/core/persistence.hpp>
 
@@ -26,6 +30,18 @@ inline bool readSmallMatrix(const cv::FileNode& node, int rows, int cols, cv::Ma
   if (m.rows != rows || m.cols != cols || m.channels() != 1) return false;
   m.convertTo(out, CV_64F);
   return true;
+}
+
+// Throws std::runtime_error unless the file begins with "%YAML", as every calibration file
+// vgr writes does. cv::FileStorage picks its parser by the content, and OpenCV 4.6's XML
+// parser dereferences null on a truncated "<?xml" text (found by fuzz_calib_files: a SEGV
+// inside cv::FileStorage::Impl::open); such a file never reaches OpenCV now. Call inside
+// the reader's try block: the reader turns the exception into its own NOT_CALIBRATED error.
+inline void requireYamlText(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  char head[5] = {};
+  if (in.read(head, sizeof head) && std::string(head, sizeof head) == "%YAML") return;
+  throw std::runtime_error("not a calibration file as vgr writes it (it must begin with %YAML)");
 }
 
 }  // namespace vgr::vision::calib

@@ -68,6 +68,7 @@ Result<HandEyeFile> readHandEye(const std::string& path) {
   HandEyeFile f;
   if (!std::filesystem::exists(path)) return fail(Status::NotCalibrated, fmt::format("{}: no such hand-eye file", path));
   try {
+    requireYamlText(path);
     cv::FileStorage fs(path, cv::FileStorage::READ);
     if (!fs.isOpened()) return fail(Status::NotCalibrated, fmt::format("{}: cannot open hand-eye file", path));
     const std::string cfg = static_cast<std::string>(fs["configuration"]);

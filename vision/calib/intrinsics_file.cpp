@@ -38,6 +38,7 @@ Result<CameraIntrinsics> readIntrinsics(const std::string& path) {
   CameraIntrinsics cam;
   if (!std::filesystem::exists(path)) return fail(Status::NotCalibrated, fmt::format("{}: no such intrinsics file", path));
   try {
+    requireYamlText(path);
     cv::FileStorage fs(path, cv::FileStorage::READ);
     if (!fs.isOpened()) return fail(Status::NotCalibrated, fmt::format("{}: cannot open intrinsics file", path));
     cv::Mat k, d;

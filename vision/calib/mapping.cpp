@@ -8,6 +8,7 @@
 #include <fmt/core.h>
 #include <opencv2/calib3d.hpp>
 
+#include "vision/calib/file_matrix.hpp"
 #include "vision/calib/se3.hpp"
 
 namespace vgr::vision::calib {
@@ -110,6 +111,7 @@ Result<WorkPlane> readWorkPlane(const std::string& path) {
   WorkPlane p;
   if (!std::filesystem::exists(path)) return fail(Status::NotCalibrated, fmt::format("{}: no such plane file", path));
   try {
+    requireYamlText(path);
     cv::FileStorage fs(path, cv::FileStorage::READ);
     if (!fs.isOpened()) return fail(Status::NotCalibrated, fmt::format("{}: cannot open plane file", path));
     cv::Vec3d pt, n;

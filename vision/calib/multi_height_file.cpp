@@ -1,4 +1,5 @@
 #include "vision/calib/multi_height_file.hpp"
+#include "vision/calib/file_matrix.hpp"
 
 #include <exception>
 #include <cmath>
@@ -68,6 +69,7 @@ Result<MultiHeightCalibration> readMultiHeight(const std::string& path, double m
   if (!std::filesystem::exists(path)) return fail(Status::NotCalibrated, fmt::format("{}: no such multi-height file", path));
   MultiHeightSamples s;
   try {
+    requireYamlText(path);
     cv::FileStorage fs(path, cv::FileStorage::READ);
     if (!fs.isOpened()) return fail(Status::NotCalibrated, fmt::format("{}: cannot open multi-height file", path));
     if (static_cast<std::string>(fs["kind"]) != "multiheight") return bad("kind", "expected 'multiheight'");
