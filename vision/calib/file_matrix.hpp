@@ -6,7 +6,9 @@
 // Thread: any (no state).
 #pragma once
 
+#include <cstddef>
 #include <fstream>
+#include <iterator>
 #include <stdexcept>
 #include <string>
 
@@ -32,16 +34,28 @@ inline bool readSmallMatrix(const cv::FileNode& node, int rows, int cols, cv::Ma
   return true;
 }
 
-// Throws std::runtime_error unless the file begins with "%YAML", as every calibration file
-// vgr writes does. cv::FileStorage picks its parser by the content, and OpenCV 4.6's XML
-// parser dereferences null on a truncated "<?xml" text (found by fuzz_calib_files: a SEGV
-// inside cv::FileStorage::Impl::open); such a file never reaches OpenCV now. Call inside
-// the reader's try block: the reader turns the exception into its own NOT_CALIBRATED error.
+// Throws std::runtime_error unless the file looks like what vgr writes: it begins with
+// "%YAML", it is text (no control bytes but tab, CR, LF) and no line after the header starts
+// with "--" other than the "---" document marker. cv::FileStorage picks its parser by the
+// content, and OpenCV 4.6's parsers fail badly on damaged text (found by fuzz_calib_files):
+// the XML parser dereferences null on a truncated "<?xml", the YAML parser loops without end
+// on a run of dashes after the header. Such a file never reaches OpenCV now. Call inside the
+// reader's try block: the reader turns the exception into its own NOT_CALIBRATED error.
 inline void requireYamlText(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  char head[5] = {};
-  if (in.read(head, sizeof head) && std::string(head, sizeof head) == "%YAML") return;
-  throw std::runtime_error("not a calibration file as vgr writes it (it must begin with %YAML)");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (text.rfind("%YAML", 0) != 0)
+    throw std::runtime_error("not a calibration file as vgr writes it (it must begin with %YAML)");
+  int line = 1;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const unsigned char c = static_cast<unsigned char>(text[i]);
+    if (c < 0x20 && c != '\t' && c != '\n' && c != '\r')
+      throw std::runtime_error("line " + std::to_string(line) + ": a control byte: not a text file");
+    if (c != '\n') continue;
+    ++line;
+    if (text.compare(i + 1, 2, "--") == 0 && text.compare(i + 1, 4, "---\n") != 0 && text.compare(i + 1, 5, "---\r\n") != 0)
+      throw std::runtime_error("line " + std::to_string(line) + ": a line of dashes that is not the '---' marker");
+  }
 }
 
 }  // namespace vgr::vision::calib
