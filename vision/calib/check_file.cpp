@@ -1,5 +1,5 @@
 #include "vision/calib/check_file.hpp"
-#include "vision/calib/file_matrix.hpp"
+#include "vision/calib/calib_file_guard.hpp"
 
 #include <exception>
 #include <cmath>

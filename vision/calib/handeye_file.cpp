@@ -7,7 +7,7 @@
 #include <fmt/core.h>
 #include <opencv2/core/persistence.hpp>
 
-#include "vision/calib/file_matrix.hpp"
+#include "vision/calib/calib_file_guard.hpp"
 #include "vision/calib/se3.hpp"
 
 // handeye.yaml and the synthetic sets' truth.yaml (same layout): written and read here only.

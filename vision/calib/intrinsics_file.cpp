@@ -7,7 +7,7 @@
 #include <fmt/core.h>
 #include <opencv2/core/persistence.hpp>
 
-#include "vision/calib/file_matrix.hpp"
+#include "vision/calib/calib_file_guard.hpp"
 
 // intrinsics.yaml (and a synthetic set's camera_truth.yaml, same layout): written and read
 // here only.

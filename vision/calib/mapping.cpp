@@ -8,7 +8,7 @@
 #include <fmt/core.h>
 #include <opencv2/calib3d.hpp>
 
-#include "vision/calib/file_matrix.hpp"
+#include "vision/calib/calib_file_guard.hpp"
 #include "vision/calib/se3.hpp"
 
 namespace vgr::vision::calib {

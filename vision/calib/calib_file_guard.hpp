@@ -1,4 +1,5 @@
-// Reading an `!!opencv-matrix` node of a calibration file safely. OpenCV sizes the matrix
+// What a calibration file must be before OpenCV parses it (requireYamlText) and reading an
+// `!!opencv-matrix` node of one safely (readSmallMatrix). OpenCV sizes the matrix
 // from the node's own `rows`/`cols` before it reads `data`, so a damaged file ("rows: U3",
 // "rows: 1000000000") could make it allocate gigabytes (found by fuzz_calib_files: a 48 GB
 // request). readSmallMatrix checks the node first: rows and cols integers in [1, maxSide],
