@@ -197,6 +197,17 @@ TEST_F(cell_check, ACameraRoiOfAnotherSizeThanTheCalibrationExits1) {
   EXPECT_TRUE(r.has_value()) << r.error().message;
 }
 
+// vgrd's start binds the web port after the robots' and Modbus ports: the same port twice
+// stopped the start (exit 1) after passing the check.
+TEST_F(cell_check, AWebPortUsedByAnotherEndpointIsRefused) {
+  const auto r = check("modbus:\n", "web: {port: 50011}\nmodbus:\n");
+  ASSERT_FALSE(r.has_value());
+  EXPECT_EQ(r.error().exitCode, 2) << r.error().message;
+  EXPECT_NE(r.error().message.find("key 'web.port': port already used by another endpoint"), std::string::npos)
+      << r.error().message;
+  EXPECT_TRUE(check("modbus:\n", "web: {port: 8080}\nmodbus:\n").has_value());
+}
+
 TEST_F(cell_check, ACellCalibratedWithFilesNeedsNoModel) {
   std::string yaml = vgr::config::embeddedSimCellYaml();
   const auto a = yaml.find("model:\n"), b = yaml.find("calibration:\n");
