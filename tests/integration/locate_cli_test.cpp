@@ -176,6 +176,31 @@ TEST_F(locate_cli, MapsWithTheCellsCalibrationFilesAsVgrdDoes) {
   EXPECT_GT(dist("off-model", "model"), 50.0);  // the test can tell a model mapping from the files' one
 }
 
+// Issue 18 item 8 as the user meets it: an image the job cannot search (smaller than the
+// template, or the job's ROI wholly outside it) is bad input: exit 2 and the reason, not
+// exit 1 ("nothing found") or "expected a non-empty 8-bit gray image".
+TEST_F(locate_cli, AnImageTheJobCannotSearchIsBadInput) {
+  const std::string data = (dir_ / "data").string(), small = (dir_ / "small").string(), job = (dir_ / "job").string();
+  auto r = vgr("sim render --out " + data + " --count 1 --seed 2 --part flat --width 640 --height 512 --focal 1000");
+  ASSERT_EQ(r.exitCode, 0) << r.out;
+  r = vgr("sim render --out " + small + " --count 1 --seed 2 --part flat --width 100 --height 80 --focal 100");
+  ASSERT_EQ(r.exitCode, 0) << r.out;
+  for (const char* method : {"hu", "shape"}) {
+    r = vgr("teach --image " + data + "/template.png --grasp 50,50 --method " + std::string(method) + " --out " + job);
+    ASSERT_EQ(r.exitCode, 0) << r.out;
+    r = vgr("locate --job " + job + " --image " + small + "/img_00000.png --json");
+    EXPECT_EQ(r.exitCode, 2) << method << ": " << r.out;
+    EXPECT_NE(r.out.find("smaller than the"), std::string::npos) << r.out;
+    r = vgr("teach --image " + data + "/template.png --grasp 50,50 --roi 5000,5000,100,100 --method " + std::string(method) +
+            " --out " + job);
+    ASSERT_EQ(r.exitCode, 0) << r.out;
+    r = vgr("locate --job " + job + " --image " + data + "/img_00000.png --json");
+    EXPECT_EQ(r.exitCode, 2) << method << ": " << r.out;
+    EXPECT_NE(r.out.find("lies outside the 640x512 px image"), std::string::npos) << r.out;
+    fs::remove_all(job);
+  }
+}
+
 TEST_F(locate_cli, LocateOverlayAndEvalOverlaysDrawTheSamePicture) {
   const std::string data = (dir_ / "data").string(), job = (dir_ / "job").string(), overlays = (dir_ / "overlays").string();
   auto r = vgr("sim render --out " + data + " --count 3 --seed 9 --part flat --parts 2 --noise 3 --width 640 --height 512 --focal 1000");

@@ -58,7 +58,9 @@ int runLocate(const LocateOptions& o) {
     j["time_ms"] = ms;
     j["parts"] = nlohmann::json::array();
     std::printf("%s\n", j.dump().c_str());
-    return 1;
+    // An image the job cannot search (smaller than the template, the ROI outside it: the
+    // locator's input check) is bad input; anything else the method could not do, 1.
+    return out.error().code == Status::BadArgument ? 2 : 1;
   }
   const Status status = out->parts.empty() ? Status::NoPartFound : Status::Ok;
   if (!o.overlay.empty()) {
