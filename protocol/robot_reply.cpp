@@ -5,11 +5,14 @@
 
 #include "protocol/robot_reply.hpp"
 
+#include <algorithm>
 #include <array>
 #include <charconv>
 #include <cmath>
 #include <regex>
 #include <string>
+
+#include <fmt/core.h>
 
 #include "core/cycle.hpp"
 #include "protocol/robot_codec.hpp"
@@ -25,11 +28,16 @@ double round3(double v) {
   return r == 0.0 ? 0.0 : r;  // no -0
 }
 
-Result<ParsedReply> parseBinaryReply(std::string_view raw) {
-  if (raw.size() != binary::kReplyBytes || static_cast<std::uint32_t>(binary::readInt32(raw, 0)) != binary::kReplyMagic ||
-      binary::readInt32(raw, 4) != static_cast<std::int32_t>(binary::kReplyBytes))
-    return fail(Status::BadArgument, "not a 40-byte VGRA frame");
+Result<ParsedReply> parseBinaryReply(std::string_view raw, bool withLabel) {
+  const std::size_t bytes = withLabel ? binary::kLabelReplyBytes : binary::kReplyBytes;
+  if (raw.size() != bytes || static_cast<std::uint32_t>(binary::readInt32(raw, 0)) != binary::kReplyMagic ||
+      binary::readInt32(raw, 4) != static_cast<std::int32_t>(bytes))
+    return fail(Status::BadArgument, fmt::format("not a {}-byte VGRA frame", bytes));
   ParsedReply p;
+  if (withLabel) {
+    p.label = binary::readInt32(raw, 40);
+    p.confidence = binary::readInt32(raw, 44) / 1000.0;  // thousandths
+  }
   p.status = binary::readInt32(raw, 8);
   p.cycle = binary::readInt32(raw, 12);
   p.xMm = round3(binary::readInt32(raw, 16) / 1000.0);  // µm
@@ -53,35 +61,44 @@ Result<ParsedReply> checkCycle(Result<ParsedReply> r) {
   for (const double mm : {r->xMm, r->yMm, r->zMm})
     if (!(std::abs(mm) <= kMaxAbsPositionMm + 0.0005)) return fail(Status::BadArgument, "position out of range");
   if (!(std::abs(r->rzDeg) <= 180.0005)) return fail(Status::BadArgument, "angle out of range");
+  if (r->label < 0 || r->label > 999 || !(r->confidence >= 0 && r->confidence <= 1.0))
+    return fail(Status::BadArgument, "label or confidence out of range");
   return r;
 }
 
-Result<ParsedReply> parseTextReply(Dialect dialect, std::string_view raw);
+Result<ParsedReply> parseTextReply(Dialect dialect, std::string_view raw, bool withLabel);
 
 }  // namespace
 
-Result<ParsedReply> parseRobotReply(Dialect dialect, std::string_view raw) {
-  if (dialect == Dialect::Binary) return checkCycle(parseBinaryReply(raw));
-  return checkCycle(parseTextReply(dialect, raw));
+Result<ParsedReply> parseRobotReply(Dialect dialect, std::string_view raw, bool withLabel) {
+  if (dialect == Dialect::Binary) return checkCycle(parseBinaryReply(raw, withLabel));
+  return checkCycle(parseTextReply(dialect, raw, withLabel));
 }
 
 namespace {
 
-Result<ParsedReply> parseTextReply(Dialect dialect, std::string_view raw) {
+Result<ParsedReply> parseTextReply(Dialect dialect, std::string_view raw, bool withLabel) {
   if (dialect == Dialect::Strict) return fail(Status::BadArgument, "the strict dialect has no replies");
   static const std::regex kUr(R"(\(-?\d+,\d+(,-?\d+\.\d{6}){6}\))");
   static const std::regex kAbb(R"(-?\d+,\d+(,-?\d+\.\d{3}){6})");
   // Fixed columns: status, cycle, X, Y, Z, W, P, R, CR LF (docs/protocols.md, "fanuc").
   static const std::regex kFanuc(R"([+-]\d{4},\d{7}(,[+-]\d{5}\.\d{3}){3}(,[+-]\d{3}\.\d{3}){3}\r\n)");
-  const std::regex& re = dialect == Dialect::Ur ? kUr : dialect == Dialect::Fanuc ? kFanuc : kAbb;
+  // reply_label: label and confidence after the pose.
+  static const std::regex kUrLabel(R"(\(-?\d+,\d+(,-?\d+\.\d{6}){6},\d{1,3},[01]\.\d{3}\))");
+  static const std::regex kAbbLabel(R"(-?\d+,\d+(,-?\d+\.\d{3}){6},\d{1,3},[01]\.\d{3})");
+  static const std::regex kFanucLabel(R"([+-]\d{4},\d{7}(,[+-]\d{5}\.\d{3}){3}(,[+-]\d{3}\.\d{3}){3},\d{3},[01]\.\d{3}\r\n)");
+  const std::regex& re = dialect == Dialect::Ur      ? (withLabel ? kUrLabel : kUr)
+                         : dialect == Dialect::Fanuc ? (withLabel ? kFanucLabel : kFanuc)
+                                                     : (withLabel ? kAbbLabel : kAbb);
   if (!std::regex_match(raw.begin(), raw.end(), re)) return fail(Status::BadArgument, "does not match the dialect");
   if (dialect == Dialect::Abb && raw.size() > kAbbMaxReplyChars) return fail(Status::BadArgument, "longer than 80 characters");
   std::string_view body(raw);
   if (dialect == Dialect::Ur) body = body.substr(1, body.size() - 2);
   if (dialect == Dialect::Fanuc) body = body.substr(0, body.size() - 2);
   ParsedReply p;
-  std::array<double, 6> v{};
-  for (std::size_t field = 0; field < 8; ++field) {
+  std::array<double, 8> v{};  // the pose, then label and confidence (reply_label)
+  const std::size_t fields = withLabel ? 10 : 8;
+  for (std::size_t field = 0; field < fields; ++field) {
     const std::size_t comma = body.find(',');
     std::string_view text = body.substr(0, comma);
     if (!text.empty() && text.front() == '+') text.remove_prefix(1);  // from_chars takes no '+'
@@ -100,7 +117,11 @@ Result<ParsedReply> parseTextReply(Dialect dialect, std::string_view raw) {
     if (!(std::abs(v[i]) <= (dialect == Dialect::Ur ? kPi + 1e-6 : 180.0005)))
       return fail(Status::BadArgument, "angle out of range");
   }
-  p.values = v;
+  std::copy(v.begin(), v.begin() + 6, p.values.begin());
+  if (withLabel) {
+    p.label = static_cast<int>(v[6]);
+    p.confidence = v[7];
+  }
   if (dialect == Dialect::Ur) {  // metres + rotation vector; planar case: rz = v.z
     p.xMm = round3(v[0] * 1000.0);
     p.yMm = round3(v[1] * 1000.0);

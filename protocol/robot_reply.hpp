@@ -28,12 +28,17 @@ struct ParsedReply {
   // in rad; abb: mm and Z-Y-X degrees; fanuc: mm and W, P, R degrees; binary: mm and
   // degrees): what a robot program computes its target from (sim/robot/robot_program.hpp).
   std::array<double, 6> values{};
+  // reply_label replies only (docs/protocols.md): the classifier's label [0, 999] and its
+  // confidence [0, 1] after the pose (binary: the 48-byte frame).
+  int label = 0;
+  double confidence = 0;
 };
 
 // The reply, or Status::BadArgument saying what is wrong with it ("does not match the
 // dialect", "longer than 80 characters", "not a 40-byte VGRA frame", "number out of range",
 // "cycle id out of range": vgrd's cycle ids are in [0, 2^23 - 1]).
-// Dialect strict has no replies: BadArgument.
-Result<ParsedReply> parseRobotReply(Dialect dialect, std::string_view raw);
+// Dialect strict has no replies: BadArgument. `withLabel`: the endpoint's reply_label form,
+// label and confidence after the pose ("label or confidence out of range" otherwise).
+Result<ParsedReply> parseRobotReply(Dialect dialect, std::string_view raw, bool withLabel = false);
 
 }  // namespace vgr::protocol

@@ -30,21 +30,14 @@
 // the daemon is re-opened (for up to 10 s) and the unanswered request sent again.
 // Exit: 0 all replies valid, 1 any invalid reply, 2 usage or connection failure.
 // Single-threaded: one io_context run by main().
-#if defined(__GNUC__) && !defined(__clang__)
-// GCC 12 reports a false -Wmaybe-uninitialized inside <regex> in sanitizer builds.
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#endif
-
 #include <algorithm>
 #include <array>
-#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstdint>
 #include <iostream>
 #include <optional>
-#include <regex>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -111,117 +104,16 @@ struct Parsed {
   double confidence = 0;
 };
 
-constexpr double kPi = 3.14159265358979323846;
-
 double round3(double v) {
   const double r = std::round(v * 1000.0) / 1000.0;
   return r == 0.0 ? 0.0 : r;  // no -0 in the output
 }
 
-Parsed parseBinary(const std::string& raw, bool withLabel) {
-  namespace bin = vgr::protocol::binary;
-  Parsed p;
-  const std::size_t bytes = withLabel ? bin::kLabelReplyBytes : bin::kReplyBytes;
-  if (raw.size() != bytes || static_cast<std::uint32_t>(bin::readInt32(raw, 0)) != bin::kReplyMagic ||
-      bin::readInt32(raw, 4) != static_cast<std::int32_t>(bytes)) {
-    p.error = fmt::format("not a {}-byte VGRA frame", bytes);
-    return p;
-  }
-  if (withLabel) {
-    p.label = bin::readInt32(raw, 40);
-    p.confidence = bin::readInt32(raw, 44) / 1000.0;
-  }
-  p.status = bin::readInt32(raw, 8);
-  p.cycle = bin::readInt32(raw, 12);
-  p.xMm = round3(bin::readInt32(raw, 16) / 1000.0);  // µm
-  p.yMm = round3(bin::readInt32(raw, 20) / 1000.0);
-  p.zMm = round3(bin::readInt32(raw, 24) / 1000.0);
-  p.rzDeg = round3(bin::readInt32(raw, 36) / 1000.0);  // r, millidegrees
-  for (std::size_t i = 0; i < 6; ++i) p.values[i] = bin::readInt32(raw, 16 + 4 * i) / 1000.0;
-  p.valid = true;
-  return p;
-}
-
-// reply_label replies (label and confidence after the pose; binary: the 48-byte frame).
-Parsed parseLabelledReply(Dialect dialect, const std::string& raw, bool withLabel) {
-  if (dialect == Dialect::Binary) return parseBinary(raw, withLabel);
-  static const std::regex kUr(R"(\(-?\d+,\d+(,-?\d+\.\d{6}){6}\))");
-  static const std::regex kAbb(R"(-?\d+,\d+(,-?\d+\.\d{3}){6})");
-  // Fixed columns: status, cycle, X, Y, Z, W, P, R, CR LF (docs/protocols.md, "fanuc").
-  static const std::regex kFanuc(R"([+-]\d{4},\d{7}(,[+-]\d{5}\.\d{3}){3}(,[+-]\d{3}\.\d{3}){3}\r\n)");
-  // reply_label: label and confidence after the pose.
-  static const std::regex kUrLabel(R"(\(-?\d+,\d+(,-?\d+\.\d{6}){6},\d{1,3},[01]\.\d{3}\))");
-  static const std::regex kAbbLabel(R"(-?\d+,\d+(,-?\d+\.\d{3}){6},\d{1,3},[01]\.\d{3})");
-  static const std::regex kFanucLabel(R"([+-]\d{4},\d{7}(,[+-]\d{5}\.\d{3}){3}(,[+-]\d{3}\.\d{3}){3},\d{3},[01]\.\d{3}\r\n)");
-  const std::regex& re = dialect == Dialect::Ur      ? (withLabel ? kUrLabel : kUr)
-                         : dialect == Dialect::Fanuc ? (withLabel ? kFanucLabel : kFanuc)
-                                                     : (withLabel ? kAbbLabel : kAbb);
-  Parsed p;
-  if (!std::regex_match(raw, re)) {
-    p.error = "does not match the dialect";
-    return p;
-  }
-  if (dialect == Dialect::Abb && raw.size() > vgr::protocol::kAbbMaxReplyChars) {
-    p.error = "longer than 80 characters";
-    return p;
-  }
-  std::string_view body(raw);
-  if (dialect == Dialect::Ur) body = body.substr(1, body.size() - 2);
-  if (dialect == Dialect::Fanuc) body = body.substr(0, body.size() - 2);
-  std::array<double, 8> v{};
-  std::size_t field = 0;
-  const std::size_t fields = withLabel ? 10 : 8;
-  while (field < fields) {
-    const std::size_t comma = body.find(',');
-    std::string_view text = body.substr(0, comma);
-    if (!text.empty() && text.front() == '+') text.remove_prefix(1);  // from_chars takes no '+'
-    std::from_chars_result res{};
-    if (field == 0) {
-      res = std::from_chars(text.data(), text.data() + text.size(), p.status);
-    } else if (field == 1) {
-      res = std::from_chars(text.data(), text.data() + text.size(), p.cycle);
-    } else {
-      res = std::from_chars(text.data(), text.data() + text.size(), v[field - 2]);
-    }
-    if (res.ec != std::errc{}) {
-      p.error = "number out of range";
-      return p;
-    }
-    ++field;
-    if (comma == std::string_view::npos) break;
-    body.remove_prefix(comma + 1);
-  }
-  std::copy(v.begin(), v.begin() + 6, p.values.begin());
-  if (dialect == Dialect::Ur) {  // metres + rotation vector; planar case: rz = v.z
-    p.xMm = round3(v[0] * 1000.0);
-    p.yMm = round3(v[1] * 1000.0);
-    p.zMm = round3(v[2] * 1000.0);
-    p.rzDeg = round3(v[5] * 180.0 / kPi);
-  } else if (dialect == Dialect::Fanuc) {  // mm + W, P, R degrees: rz is R, the last
-    p.xMm = round3(v[0]);
-    p.yMm = round3(v[1]);
-    p.zMm = round3(v[2]);
-    p.rzDeg = round3(v[5]);
-  } else {  // mm + Z-Y-X degrees: rz is the first angle
-    p.xMm = round3(v[0]);
-    p.yMm = round3(v[1]);
-    p.zMm = round3(v[2]);
-    p.rzDeg = round3(v[3]);
-  }
-  if (withLabel) {
-    p.label = static_cast<int>(v[6]);
-    p.confidence = v[7];
-  }
-  p.valid = true;
-  return p;
-}
-
-// A plain reply goes through the strict checker (protocol/robot_reply.hpp, shared with
-// fuzz_robot_reply: vgrd's ranges), a labelled one through parseLabelledReply.
+// A reply checked against the dialect by the robot's-side parser (protocol/robot_reply.hpp,
+// shared with fuzz_robot_reply: vgrd's ranges), plain or reply_label.
 Parsed parseReply(Dialect dialect, const std::string& raw, bool withLabel) {
-  if (withLabel) return parseLabelledReply(dialect, raw, true);
   Parsed p;
-  const vgr::Result<vgr::protocol::ParsedReply> r = vgr::protocol::parseRobotReply(dialect, raw);
+  const vgr::Result<vgr::protocol::ParsedReply> r = vgr::protocol::parseRobotReply(dialect, raw, withLabel);
   if (!r) {
     p.error = r.error().message;
     return p;
@@ -234,6 +126,8 @@ Parsed parseReply(Dialect dialect, const std::string& raw, bool withLabel) {
   p.zMm = r->zMm;
   p.rzDeg = r->rzDeg;
   p.values = r->values;
+  p.label = r->label;
+  p.confidence = r->confidence;
   return p;
 }
 

@@ -2,7 +2,8 @@
 // strict reply checker vgr-sim-robot and `vgr soak` read every reply with. Two modes by
 // byte 0's top bit:
 //   0: raw bytes as a reply of the dialect byte 0 picks (ur, abb, fanuc, binary): accepted
-//      replies have finite numbers and the dialect's size limits;
+//      replies have finite numbers and the dialect's size limits (byte 0's bit 6: the
+//      reply_label form, label and confidence in range);
 //   1: a reply built from the input bytes (status, cycle, a pose of raw doubles: NaN, inf,
 //      huge) is formatted by vgrd's formatReply() and must be accepted by the checker with
 //      the same status and cycle, and its position within the dialect's rounding: every
@@ -47,16 +48,18 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const Dialect d = kDialects[data[0] % 4];
   if ((data[0] & 0x80) == 0) {
     const std::string_view raw(reinterpret_cast<const char*>(data + 1), size - 1);
-    const auto r = parseRobotReply(d, raw);
+    const bool withLabel = (data[0] & 0x40) != 0;  // the reply_label form
+    const auto r = parseRobotReply(d, raw, withLabel);
     if (!r) {
       check(r.error().code == vgr::Status::BadArgument);
       return 0;
     }
     check(std::isfinite(r->xMm) && std::isfinite(r->yMm) && std::isfinite(r->zMm) && std::isfinite(r->rzDeg));
     check(r->cycle >= 0);
+    check(r->label >= 0 && r->label <= kMaxReplyLabel && r->confidence >= 0 && r->confidence <= 1);
     if (d == Dialect::Abb) check(raw.size() <= kAbbMaxReplyChars);
-    if (d == Dialect::Fanuc) check(raw.size() == kFanucReplyChars);
-    if (d == Dialect::Binary) check(raw.size() == binary::kReplyBytes);
+    if (d == Dialect::Fanuc) check(raw.size() == (withLabel ? kFanucLabelReplyChars : kFanucReplyChars));
+    if (d == Dialect::Binary) check(raw.size() == (withLabel ? binary::kLabelReplyBytes : binary::kReplyBytes));
     return 0;
   }
   const std::uint8_t* p = data + 1;
