@@ -190,6 +190,32 @@ TEST_F(locate_cli, AnImageTheJobCannotSearchIsBadInput) {
   }
 }
 
+// Output paths are checked before the work starts (issue 18 item 6's rule, for the tools
+// that write pictures): `vgr eval --plot` into a folder that does not exist used to fail only
+// after every image was evaluated (the run lost, its JSON never printed). The data set has
+// an unreadable image, which an evaluation names on stderr: no such line may appear.
+TEST_F(locate_cli, OutputPathsAreCheckedBeforeTheWork) {
+  const std::string data = (dir_ / "data").string(), job = (dir_ / "job").string();
+  auto r = vgr("sim render --out " + data + " --count 2 --seed 5 --part flat --width 640 --height 512 --focal 1000");
+  ASSERT_EQ(r.exitCode, 0) << r.out;
+  r = vgr("teach --image " + data + "/template.png --grasp 50,50 --method hu --out " + job);
+  ASSERT_EQ(r.exitCode, 0) << r.out;
+  std::ofstream(dir_ / "data" / "img_00001.png") << "not an image";
+  const std::string plot = (dir_ / "no-such-folder" / "plot.png").string();
+  r = vgr("eval --job " + job + " --dataset " + data + " --plot " + plot + " --json");
+  EXPECT_EQ(r.exitCode, 2) << r.out;
+  EXPECT_NE(r.out.find("--plot " + plot + ": the folder"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("left out"), std::string::npos) << "the data set was evaluated before the plot path was checked\n" << r.out;
+  r = vgr("eval --job " + job + " --dataset " + data + " --plot " + (dir_ / "plot.txt").string() + " --json");
+  EXPECT_EQ(r.exitCode, 2) << r.out;
+  EXPECT_EQ(r.out.find("left out"), std::string::npos) << r.out;
+
+  const std::string overlay = (dir_ / "no-such-folder" / "o.png").string();
+  r = vgr("locate --job " + job + " --image " + data + "/img_00000.png --overlay " + overlay + " --json");
+  EXPECT_EQ(r.exitCode, 2) << r.out;
+  EXPECT_NE(r.out.find("--overlay " + overlay + ": the folder"), std::string::npos) << r.out;
+}
+
 TEST_F(locate_cli, LocateOverlayAndEvalOverlaysDrawTheSamePicture) {
   const std::string data = (dir_ / "data").string(), job = (dir_ / "job").string(), overlays = (dir_ / "overlays").string();
   auto r = vgr("sim render --out " + data + " --count 3 --seed 9 --part flat --parts 2 --noise 3 --width 640 --height 512 --focal 1000");

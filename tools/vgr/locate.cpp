@@ -16,6 +16,7 @@
 #include "core/pose.hpp"
 #include "daemon/cell_mapping.hpp"
 #include "daemon/job_locator.hpp"
+#include "tools/vgr/calibrate_common.hpp"
 #include "vision/calib/pixel_mapping.hpp"
 #include "vision/gray_image.hpp"
 #include "vision/locate/locator.hpp"
@@ -47,7 +48,10 @@ int runLocate(const LocateOptions& o) {
   }
   auto locator = daemon::makeJobLocator(*job, method);
   if (!locator) return badInput(locator.error().message);
-  if (!o.overlay.empty() && !cv::haveImageWriter(o.overlay)) return badInput(o.overlay + ": --overlay needs a .png (or another image) file name");
+  if (!o.overlay.empty()) {
+    if (auto w = checkOutputPath(o.overlay, "--overlay"); !w) return badInput(w.error().message);
+    if (!cv::haveImageWriter(o.overlay)) return badInput(o.overlay + ": --overlay needs a .png (or another image) file name");
+  }
   const auto t0 = std::chrono::steady_clock::now();
   auto out = (*locator)->locate(img);
   const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
