@@ -184,12 +184,13 @@ Result<EvalReport> evaluate(const EvalOptions& o) {
   for (std::size_t i = 0; i < count; ++i) {
     const TruthImage& ti = (*truth)[i];
     const std::string path = (std::filesystem::path(o.datasetFolder) / ti.image).string();
-    const cv::Mat img = vision::readGray8(path).value_or(cv::Mat());
-    if (img.empty()) {
+    auto read = vision::readGray8(path);
+    if (!read) {
       // Reported (EvalReport::unreadable) and left out; the rest are evaluated.
-      rep.unreadable.push_back(path + ": cannot read the image");
+      rep.unreadable.push_back(read.error().message);
       continue;
     }
+    const cv::Mat img = *read;
     const auto t0 = std::chrono::steady_clock::now();
     auto out = (*locator)->locate(img);
     rep.timeMs.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());

@@ -29,8 +29,9 @@ int runLocate(const LocateOptions& o) {
   auto job = config::loadJob(o.job);
   if (!job) return badInput(job.error().message);
   const std::string method = o.method.empty() ? job->method : o.method;
-  const cv::Mat img = vision::readGray8(o.image).value_or(cv::Mat());
-  if (img.empty()) return badInput(o.image + ": cannot read the image");
+  auto read = vision::readGray8(o.image);
+  if (!read) return badInput(read.error().message);
+  const cv::Mat img = *read;
   // With a calibration (a cell config), pixels map to the robot frame exactly as vgrd maps
   // them: the mapping that cell selects (daemon/cell_mapping.hpp) and vision::partPoses.
   std::unique_ptr<vision::calib::PixelMapping> mapping;
