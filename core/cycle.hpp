@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "core/pose.hpp"
@@ -35,6 +36,8 @@ struct CycleResult {
   int jobId = 0;
   TriggerSource trigger = TriggerSource::Modbus;
   std::uint64_t frameId = 0;   // camera frame (GVSP block) id, 0 when no frame
+  // Eye-in-hand snapshot: T_base_flange the robot sent with its trigger (mm + quaternion).
+  std::optional<Pose> flange;
   std::vector<PartResult> parts;  // best first
   double grabMs = 0, locateMs = 0, totalMs = 0;
   std::chrono::system_clock::time_point triggerTime;

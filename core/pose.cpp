@@ -53,6 +53,26 @@ Vec3 toRotationVector(const Pose& p) {
   return {v.x(), v.y(), v.z()};
 }
 
+Pose poseFromEulerZyxDeg(double x, double y, double z, const EulerZyxDeg& e) {
+  constexpr double kDegToRad = M_PI / 180.0;
+  const Eigen::Quaterniond q = Eigen::AngleAxisd(e.rz * kDegToRad, Eigen::Vector3d::UnitZ()) *
+                               Eigen::AngleAxisd(e.ry * kDegToRad, Eigen::Vector3d::UnitY()) *
+                               Eigen::AngleAxisd(e.rx * kDegToRad, Eigen::Vector3d::UnitX());
+  return fromEigen({x, y, z}, q);
+}
+
+Pose poseFromRotationVector(double x, double y, double z, const Vec3& rv) {
+  const Eigen::Vector3d v(rv.x, rv.y, rv.z);
+  const double angle = v.norm();
+  const Eigen::Quaterniond q =
+      angle < 1e-15 ? Eigen::Quaterniond::Identity() : Eigen::Quaterniond(Eigen::AngleAxisd(angle, v / angle));
+  return fromEigen({x, y, z}, q);
+}
+
+Pose poseFromQuaternion(double x, double y, double z, double qw, double qx, double qy, double qz) {
+  return fromEigen({x, y, z}, Eigen::Quaterniond(qw, qx, qy, qz));
+}
+
 Pose compose(const Pose& a, const Pose& b) {
   const Eigen::Quaterniond qa = quat(a);
   const Eigen::Vector3d t = Eigen::Vector3d(a.x, a.y, a.z) + qa * Eigen::Vector3d(b.x, b.y, b.z);

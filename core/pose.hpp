@@ -27,6 +27,14 @@ EulerZyxDeg toEulerZyxDeg(const Pose& p);
 // Rotation vector (axis * angle) in radians, as URScript's p[x, y, z, rx, ry, rz].
 Vec3 toRotationVector(const Pose& p);
 
+// The inverse conversions, for poses a robot sends (eye-in-hand snapshots, pose files):
+// (x, y, z) mm with a rotation given as Z-Y-X Euler degrees, a rotation vector (rad) or a
+// quaternion (w, x, y, z; normalised here, returned with qw >= 0). Callers check that the
+// inputs are finite and, for a quaternion, that its norm is near 1 (protocol/robot_codec).
+Pose poseFromEulerZyxDeg(double x, double y, double z, const EulerZyxDeg& e);
+Pose poseFromRotationVector(double x, double y, double z, const Vec3& rotationVectorRad);
+Pose poseFromQuaternion(double x, double y, double z, double qw, double qx, double qy, double qz);
+
 // Composition a * b and inverse, for T_base_ref^-1 * T_base_part style offsets.
 Pose compose(const Pose& a, const Pose& b);
 Pose inverse(const Pose& p);

@@ -105,7 +105,7 @@ void CycleRunner::setFirstCycleId(std::uint32_t id) {
   nextCycleId_ = id == 0 || id > kMaxCycleId ? 1 : id;
 }
 
-std::uint32_t CycleRunner::submit(int jobId, TriggerSource source) {
+std::uint32_t CycleRunner::submit(int jobId, TriggerSource source, const std::optional<Pose>& flange) {
   // JOB_ID 0 (a PLC that never wrote HR1) runs the cell's first job.
   if (jobId == 0 && !cell_.jobs.empty()) jobId = cell_.jobs.front().id;
   std::uint32_t id;
@@ -117,7 +117,7 @@ std::uint32_t CycleRunner::submit(int jobId, TriggerSource source) {
     }
     id = nextCycleId_;
     nextCycleId_ = nextCycleId_ >= kMaxCycleId ? 1 : nextCycleId_ + 1;
-    queue_.push_back({id, jobId, source, Clock::now(), std::chrono::system_clock::now()});
+    queue_.push_back({id, jobId, source, flange, Clock::now(), std::chrono::system_clock::now()});
   }
   cv_.notify_one();
   return id;
@@ -155,6 +155,7 @@ CycleResult CycleRunner::runCycle(const Trigger& t) {
   r.cycleId = t.cycleId;
   r.jobId = t.jobId;
   r.trigger = t.source;
+  r.flange = t.flange;
   r.triggerTime = t.wallAt;
   const auto deadline = t.at + milliseconds(cell_.cycleDeadlineMs);
   auto end = [&](Status status, const std::string& why) {
@@ -168,6 +169,12 @@ CycleResult CycleRunner::runCycle(const Trigger& t) {
   const auto job = jobs_.find(t.jobId);
   if (job == jobs_.end()) return end(Status::JobNotFound, fmt::format("job {} is not configured", t.jobId));
   if (!mapping_) return end(Status::NotCalibrated, fmt::format("job {}: NOT_CALIBRATED: {}", t.jobId, calibrationError_));
+  // An eye-in-hand camera moves with the robot: without the flange pose of this image there
+  // is no mapping (a PLC or operator trigger, or a robot's TRIG without its pose).
+  if (mapping_->eyeInHand() && !t.flange)
+    return end(Status::BadArgument, fmt::format("job {}: the camera is on the flange (eye-in-hand) and this {} trigger "
+                                                "carries no flange pose; a robot sends TRIG,<job>,<pose>",
+                                                t.jobId, triggerSourceName(t.source)));
 
   // 1. grab
   const auto grabStart = Clock::now();
@@ -178,6 +185,12 @@ CycleResult CycleRunner::runCycle(const Trigger& t) {
   if (const auto size = mapping_->imageSize(); size && (frame_.width != size->width || frame_.height != size->height))
     return end(Status::NotCalibrated, fmt::format("NOT_CALIBRATED: the calibration is for {}x{} px, the camera delivers {}x{} px",
                                                   size->width, size->height, frame_.width, frame_.height));
+
+  // A depth frame is no image for a 2D method (the camera was set to Coord3D_C16).
+  if (frame_.depth())
+    return end(Status::BadArgument, fmt::format("job {}: a 2D method cannot locate in the depth frames of this camera "
+                                                "(pixel format Coord3D_C16)",
+                                                t.jobId));
 
   // 2. locate
   const auto locateStart = Clock::now();
@@ -194,8 +207,13 @@ CycleResult CycleRunner::runCycle(const Trigger& t) {
   r.locateMs = msSince(locateStart);
   if (!found) return end(found.error().code, found.error().message);
 
-  // 3. map
-  r.parts = vision::partPoses(found->parts, *mapping_, job->second.rules);
+  // 3. map (eye-in-hand: with the camera where the flange was for this image)
+  if (const auto* eyeInHand = mapping_->eyeInHand()) {
+    const vision::calib::SnapshotMapping snapshot(*eyeInHand, *t.flange);
+    r.parts = vision::partPoses(found->parts, snapshot, job->second.rules);
+  } else {
+    r.parts = vision::partPoses(found->parts, *mapping_, job->second.rules);
+  }
   r.status = r.parts.empty() ? Status::NoPartFound : Status::Ok;
   r.totalMs = msSince(t.at);
   if (Clock::now() > deadline)

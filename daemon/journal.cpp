@@ -107,11 +107,17 @@ std::string Journal::toJson(const CycleResult& r) {
     const auto o = toEulerZyxDeg(p.offset);
     parts.push_back({{"x_mm", round3(p.pose.x)}, {"y_mm", round3(p.pose.y)}, {"z_mm", round3(p.pose.z)},
                      {"rz_deg", round3(e.rz)}, {"ry_deg", round3(e.ry)}, {"rx_deg", round3(e.rx)},
-                     {"dx_mm", round3(p.offset.x)}, {"dy_mm", round3(p.offset.y)}, {"drz_deg", round3(o.rz)},
+                     {"dx_mm", round3(p.offset.x)}, {"dy_mm", round3(p.offset.y)}, {"dz_mm", round3(p.offset.z)},
+                     {"drz_deg", round3(o.rz)}, {"dry_deg", round3(o.ry)}, {"drx_deg", round3(o.rx)},
                      {"u_px", round3(p.uPx)}, {"v_px", round3(p.vPx)}, {"angle_img_deg", round3(p.angleImgDeg)},
                      {"score", round3(p.score)}, {"label", p.label}});
   }
   j["parts"] = std::move(parts);
+  if (r.flange) {  // eye-in-hand: where the robot said its flange was for this image
+    const auto e = toEulerZyxDeg(*r.flange);
+    j["flange"] = {{"x_mm", round3(r.flange->x)}, {"y_mm", round3(r.flange->y)}, {"z_mm", round3(r.flange->z)},
+                   {"rz_deg", round3(e.rz)}, {"ry_deg", round3(e.ry)}, {"rx_deg", round3(e.rx)}};
+  }
   return j.dump();
 }
 

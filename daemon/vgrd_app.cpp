@@ -149,8 +149,8 @@ Result<void> VgrdApp::start() {
   for (const auto& j : s.cfg.jobs) jobs.insert(j.id);
   s.results = std::make_unique<ResultStore>(s.io, jobs);
   s.plant = std::make_unique<Plant>(s.io, s.cfg);
-  s.results->setTrigger([&s](int jobId) {
-    return s.plant->triggered(TriggerSource::Robot, s.cycles->submit(jobId, TriggerSource::Robot));
+  s.results->setTrigger([&s](int jobId, const std::optional<Pose>& flange) {
+    return s.plant->triggered(TriggerSource::Robot, s.cycles->submit(jobId, TriggerSource::Robot, flange));
   });
 
   CycleSinks sinks;
@@ -173,10 +173,13 @@ Result<void> VgrdApp::start() {
     ep.maxClients = static_cast<std::size_t>(rc.maxClients);
     ep.allowedClients = rc.allowedClients;
     ep.idleTimeoutMs = rc.idleTimeoutMs;
+    ep.abbRotation = rc.abbRotation;
     ep.strict.command = rc.strict.command;
     ep.strict.ready = rc.strict.ready;
     ep.strict.done = rc.strict.done;
     ep.strict.lineEnd = rc.strict.lineEnd;
+    ep.strict.snapshot = rc.strict.snapshot;
+    ep.strict.none = rc.strict.none;
     ep.stepTimeoutMs = rc.strict.stepTimeoutMs;
 
     RobotPolicy policy;

@@ -215,7 +215,7 @@ class RequestSession final : public Session {
 
   void deliverAwaited(const RobotReply& reply) override {
     awaitingReply_ = false;
-    writeBytes(formatReply(server_->endpoint.dialect, reply));
+    writeBytes(formatReply(server_->endpoint.dialect, reply, server_->endpoint.abbRotation));
     advance();
   }
 
@@ -249,7 +249,7 @@ class RequestSession final : public Session {
                  item.error().message);
       RobotReply r;
       r.status = item.error().code;
-      writeBytes(formatReply(server_->endpoint.dialect, r));
+      writeBytes(formatReply(server_->endpoint.dialect, r, server_->endpoint.abbRotation));
       return;
     }
     callHandler(*item);
@@ -371,6 +371,13 @@ class StrictSession final : public Session {
       log::error("robot", "robot '{}': cycle {}: {}; not sent", server_->endpoint.name, reply.cycleId,
                  frame.error().message);
     }
+    if (exchange_.snapshotMode()) {
+      // The robot waits for an answer to its snapshot: tell it there is nothing to move.
+      const Status st = reply.status == Status::Ok ? Status::Internal : reply.status;
+      log::debug("robot", "robot '{}': snapshot cycle {} ended {}", server_->endpoint.name, reply.cycleId, statusCode(st));
+      writeBytes(exchange_.noResult(st));  // onWritten() settles the reply as delivered
+      return;
+    }
     // Statuses are not pushed in this dialect: consumed as they are.
     settleWritten(true);
     // Nothing to move. Statuses 2 and 3 came after the reply deadline: ask again at once;
@@ -387,8 +394,18 @@ class StrictSession final : public Session {
 
  private:
   void ask() {
+    // Snapshot mode: the robot drives (onSnapshot); push mode: GET whenever idle.
+    if (exchange_.snapshotMode()) return;
     if (closed_ || awaitingReply_ || exchange_.step() != StrictExchange::Step::Idle) return;
     RobotRequest req;  // GET of the robot's current job
+    callHandler(req);
+  }
+
+  void onSnapshot(const Pose& flange) {
+    if (closed_ || awaitingReply_) return;
+    RobotRequest req;  // TRIG of the robot's current job, with the flange pose of the image
+    req.command = Command::Trigger;
+    req.flange = flange;
     callHandler(req);
   }
 
@@ -435,6 +452,15 @@ class StrictSession final : public Session {
       if (e.kind == StrictExchange::EventKind::Unexpected) {
         log::warn("robot", "robot '{}': {} sent '{}' while no exchange was running; ignored", server_->endpoint.name,
                   peer_, e.detail);
+        continue;
+      }
+      if (e.kind == StrictExchange::EventKind::Snapshot) {
+        onSnapshot(e.pose);
+        continue;
+      }
+      if (e.kind == StrictExchange::EventKind::BadSnapshot) {
+        log::warn("robot", "robot '{}': {}: {}; answered {}", server_->endpoint.name, peer_, e.detail, statusCode(e.status));
+        if (!writing_) writeBytes(exchange_.noResult(e.status));
         continue;
       }
       finish(std::move(e));

@@ -40,6 +40,8 @@ struct RobotEndpoint {
   // request in progress, is closed (ms; 0 = never). Not applied to the strict dialect
   // (vgrd speaks first there; its step timeout covers a silent robot).
   int idleTimeoutMs = 0;
+  // Abb dialect only: how a reply writes the rotation (Z-Y-X Euler or quaternion).
+  AbbRotation abbRotation = AbbRotation::EulerZyx;
   // Strict dialect only: the tokens and the time each step may take (ms, > 0).
   StrictTokens strict;
   int stepTimeoutMs = 10000;
@@ -102,7 +104,9 @@ class ReplyFn {
 // Strict dialect: the session itself asks, with GET (job 0 = the robot's current job),
 // whenever it is idle; a reply with status Ok is pushed to the robot through the four-step
 // exchange, any other reply is not sent (statuses 2 and 3 re-ask at once, others after a
-// short pause).
+// short pause). With strict.snapshot set it asks only when the robot sent a snapshot: TRIG
+// (job 0) with the robot's flange pose; a reply that is not Ok goes to the robot as
+// "<none>(<status>)".
 using RequestHandler = std::function<void(const std::string& robotName, const RobotRequest& req, ReplyFn reply)>;
 
 class RobotServer {

@@ -1,6 +1,7 @@
 // vgr-sim-camera: GigE Vision cameras on loopback serving rendered scenes with known ground
 // truth (or the images of a folder): the config's `sim.scene` (plate, part or multi; see
-// sim/cell_scenes.hpp). With no arguments it serves the camera of the embedded
+// sim/cell_scenes.hpp). --depth DIR: a depth camera (Coord3D_C16 with the SFNC Scan3d
+// features) serving a 3D data set, truth per frame with --truth (sim/camera/emulator.hpp). With no arguments it serves the camera of the embedded
 // example cell (config/examples/sim-cell.yaml): address 127.0.0.1, serial VGR-SIM-0, seed 1.
 // Several cameras: --camera SERIAL@ADDRESS, repeated (one address each; camera i renders
 // with seed + i). SIGUSR1 = one edge on every camera's Line0 (simulated hardware trigger).
@@ -42,6 +43,11 @@ int main(int argc, char** argv) {
   app.add_option("--scene", scene, "what to show: plate, part (textured) or multi (height levels) (default: the config's sim.scene)")
       ->check(CLI::IsMember({"plate", "part", "multi"}));
   app.add_option("--images", imagesFolder, "serve the images of this folder (name order, looping) instead of scenes");
+  std::string depthDataset, depthUnit = "Millimeter";
+  app.add_option("--depth", depthDataset,
+                 "be a depth camera (Coord3D_C16, Scan3d features) serving this 3D data set (camera.yaml, images/, truth.csv)");
+  app.add_option("--depth-unit", depthUnit, "the Scan3dDistanceUnit served (tests of a camera the driver refuses)")
+      ->check(CLI::IsMember({"Millimeter", "Inch", "Pixel"}));
   app.add_option("--truth", truthPath, "append one JSON line of ground truth per served frame to this file (first camera)");
   CLI11_PARSE(app, argc, argv);
 
@@ -81,6 +87,8 @@ int main(int argc, char** argv) {
     o.lossRatio = loss;
     o.fps = fps;
     o.imagesFolder = imagesFolder;
+    o.depthDataset = depthDataset;
+    o.depthUnit = depthUnit;
     if (i == 0) o.truthPath = truthPath;
     auto cell = *cfg;
     cell.sim.seed = cfg->sim.seed + i;

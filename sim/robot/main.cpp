@@ -5,12 +5,19 @@
 //           socket_read_ascii_float does.
 //   abb   : SocketSend \Str:="GET,<job>#"; SocketReceive \Str reads whatever is buffered, at
 //           most 80 characters, in ONE call: a reply split over two TCP segments, longer than
-//           80 characters or followed by stray bytes shows up as invalid.
+//           80 characters or followed by stray bytes shows up as invalid. --abb-rotation
+//           quaternion: the reply carries q1..q4 instead of rz, ry, rx.
 //   fanuc : WRITE "GET,<job>" CR LF; READ a line up to CR LF (KAREL file READ), which must be
 //           the 75-byte fixed-column reply that SUB_STR/CNV_STR_REAL take apart.
 //   binary: the 16-byte VGRQ request; reads exactly 40 bytes (socket_read_binary_integer(10))
 //           and checks magic and length.
 // (`strict` is a push protocol, not a poll: tests/integration/robot_wire_test.cpp plays it.)
+// Every reply is parsed with all six degrees of freedom and printed as x, y, z mm and the
+// Z-Y-X Euler angles rz, ry, rx in degrees (the journal's convention), whatever the dialect's
+// own notation. --snapshot POSE makes each request an eye-in-hand snapshot,
+// "TRIG,<job>,<pose>", the flange pose written in the dialect's own notation (ur: URScript's
+// printed pose p[...] in m/rad; abb: RAPID's ValToStr [[x,y,z],[q1,q2,q3,q4]]; fanuc:
+// x,y,z,w,p,r as KAREL writes them; binary: the 40-byte request).
 //
 // Output: one line per reply on stdout (JSON with --json); diagnostics on stderr.
 // A reply that does not come within --timeout-ms counts as invalid (the protocol promises a
@@ -48,6 +55,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/log.hpp"
+#include "core/pose.hpp"
 #include "protocol/robot_codec.hpp"
 
 namespace {
@@ -73,7 +81,11 @@ struct Options {
   int intervalMs = 100;
   int timeoutMs = 3000;
   bool json = false;
+  std::string abbRotation = "zyx";
+  std::string snapshot;  // "x,y,z,qw,qx,qy,qz" mm + quaternion: send TRIG with this flange pose
 };
+
+double round3(double v);
 
 // A reply checked against the dialect; the numbers are set only when valid.
 struct Parsed {
@@ -81,8 +93,19 @@ struct Parsed {
   std::string error;
   int status = 0;
   long long cycle = 0;
-  double xMm = 0, yMm = 0, zMm = 0, rzDeg = 0;
+  double xMm = 0, yMm = 0, zMm = 0, rzDeg = 0, ryDeg = 0, rxDeg = 0;
 };
+
+// Fills the six values from the pose the reply carries.
+void setPose(Parsed& p, const vgr::Pose& pose) {
+  const vgr::EulerZyxDeg e = vgr::toEulerZyxDeg(pose);
+  p.xMm = round3(pose.x);
+  p.yMm = round3(pose.y);
+  p.zMm = round3(pose.z);
+  p.rzDeg = round3(e.rz);
+  p.ryDeg = round3(e.ry);
+  p.rxDeg = round3(e.rx);
+}
 
 double round3(double v) {
   const double r = std::round(v * 1000.0) / 1000.0;
@@ -99,21 +122,26 @@ Parsed parseBinary(const std::string& raw) {
   }
   p.status = bin::readInt32(raw, 8);
   p.cycle = bin::readInt32(raw, 12);
-  p.xMm = round3(bin::readInt32(raw, 16) / 1000.0);  // µm
-  p.yMm = round3(bin::readInt32(raw, 20) / 1000.0);
-  p.zMm = round3(bin::readInt32(raw, 24) / 1000.0);
-  p.rzDeg = round3(bin::readInt32(raw, 36) / 1000.0);  // r, millidegrees
+  // x, y, z µm; w, p, r millidegrees (R = Rz(r)·Ry(p)·Rx(w))
+  const vgr::EulerZyxDeg e{bin::readInt32(raw, 36) / 1000.0, bin::readInt32(raw, 32) / 1000.0,
+                           bin::readInt32(raw, 28) / 1000.0};
+  setPose(p, vgr::poseFromEulerZyxDeg(bin::readInt32(raw, 16) / 1000.0, bin::readInt32(raw, 20) / 1000.0,
+                                      bin::readInt32(raw, 24) / 1000.0, e));
   p.valid = true;
   return p;
 }
 
-Parsed parseReply(Dialect dialect, const std::string& raw) {
+Parsed parseReply(Dialect dialect, bool abbQuaternion, const std::string& raw) {
   if (dialect == Dialect::Binary) return parseBinary(raw);
   static const std::regex kUr(R"(\(-?\d+,\d+(,-?\d+\.\d{6}){6}\))");
   static const std::regex kAbb(R"(-?\d+,\d+(,-?\d+\.\d{3}){6})");
+  static const std::regex kAbbQuat(R"(-?\d+,\d+(,-?\d+\.\d{3}){3}(,-?\d\.\d{5}){4})");
   // Fixed columns: status, cycle, X, Y, Z, W, P, R, CR LF (docs/protocols.md, "fanuc").
   static const std::regex kFanuc(R"([+-]\d{4},\d{7}(,[+-]\d{5}\.\d{3}){3}(,[+-]\d{3}\.\d{3}){3}\r\n)");
-  const std::regex& re = dialect == Dialect::Ur ? kUr : dialect == Dialect::Fanuc ? kFanuc : kAbb;
+  const std::regex& re = dialect == Dialect::Ur      ? kUr
+                         : dialect == Dialect::Fanuc ? kFanuc
+                         : abbQuaternion             ? kAbbQuat
+                                                     : kAbb;
   Parsed p;
   if (!std::regex_match(raw, re)) {
     p.error = "does not match the dialect";
@@ -126,9 +154,10 @@ Parsed parseReply(Dialect dialect, const std::string& raw) {
   std::string_view body(raw);
   if (dialect == Dialect::Ur) body = body.substr(1, body.size() - 2);
   if (dialect == Dialect::Fanuc) body = body.substr(0, body.size() - 2);
-  std::array<double, 6> v{};
+  std::array<double, 7> v{};
+  const std::size_t fields = dialect == Dialect::Abb && abbQuaternion ? 9 : 8;
   std::size_t field = 0;
-  while (field < 8) {
+  while (field < fields) {
     const std::size_t comma = body.find(',');
     std::string_view text = body.substr(0, comma);
     if (!text.empty() && text.front() == '+') text.remove_prefix(1);  // from_chars takes no '+'
@@ -148,35 +177,53 @@ Parsed parseReply(Dialect dialect, const std::string& raw) {
     if (comma == std::string_view::npos) break;
     body.remove_prefix(comma + 1);
   }
-  if (dialect == Dialect::Ur) {  // metres + rotation vector; planar case: rz = v.z
-    p.xMm = round3(v[0] * 1000.0);
-    p.yMm = round3(v[1] * 1000.0);
-    p.zMm = round3(v[2] * 1000.0);
-    p.rzDeg = round3(v[5] * 180.0 / kPi);
-  } else if (dialect == Dialect::Fanuc) {  // mm + W, P, R degrees: rz is R, the last
-    p.xMm = round3(v[0]);
-    p.yMm = round3(v[1]);
-    p.zMm = round3(v[2]);
-    p.rzDeg = round3(v[5]);
-  } else {  // mm + Z-Y-X degrees: rz is the first angle
-    p.xMm = round3(v[0]);
-    p.yMm = round3(v[1]);
-    p.zMm = round3(v[2]);
-    p.rzDeg = round3(v[3]);
+  if (dialect == Dialect::Ur) {  // metres + rotation vector
+    setPose(p, vgr::poseFromRotationVector(v[0] * 1000.0, v[1] * 1000.0, v[2] * 1000.0, vgr::Vec3{v[3], v[4], v[5]}));
+  } else if (dialect == Dialect::Fanuc) {  // mm + W, P, R degrees
+    setPose(p, vgr::poseFromEulerZyxDeg(v[0], v[1], v[2], vgr::EulerZyxDeg{v[5], v[4], v[3]}));
+  } else if (abbQuaternion) {  // mm + q1..q4 (w, x, y, z)
+    const double n = std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5] + v[6] * v[6]);
+    if (p.status == 0 && std::abs(n - 1.0) > 2e-5) {  // 5 decimals: |q| is 1 within 1e-5
+      p.error = "quaternion is not a unit quaternion";
+      return p;
+    }
+    setPose(p, vgr::poseFromQuaternion(v[0], v[1], v[2], v[3], v[4], v[5], v[6]));
+  } else {  // mm + Z-Y-X degrees rz, ry, rx
+    setPose(p, vgr::poseFromEulerZyxDeg(v[0], v[1], v[2], vgr::EulerZyxDeg{v[3], v[4], v[5]}));
   }
   p.valid = true;
   return p;
 }
 
+// The flange pose as a robot program of the dialect writes it (see the top of the file).
+std::string snapshotPoseText(Dialect dialect, const vgr::Pose& f) {
+  switch (dialect) {
+    case Dialect::Abb:
+      return fmt::format("[[{:.3f},{:.3f},{:.3f}],[{:.6f},{:.6f},{:.6f},{:.6f}]]", f.x, f.y, f.z, f.qw, f.qx, f.qy, f.qz);
+    case Dialect::Fanuc: {
+      const vgr::EulerZyxDeg e = vgr::toEulerZyxDeg(f);
+      return fmt::format("{:10.3f},{:10.3f},{:10.3f},{:10.3f},{:10.3f},{:10.3f}", f.x, f.y, f.z, e.rx, e.ry, e.rz);
+    }
+    default: {
+      const vgr::Vec3 rv = vgr::toRotationVector(f);
+      return fmt::format("p[{:.6f}, {:.6f}, {:.6f}, {:.6f}, {:.6f}, {:.6f}]", f.x / 1000.0, f.y / 1000.0, f.z / 1000.0,
+                         rv.x, rv.y, rv.z);
+    }
+  }
+}
+
 class SimRobot {
  public:
-  SimRobot(asio::io_context& io, Options opt, Dialect dialect)
+  SimRobot(asio::io_context& io, Options opt, Dialect dialect, const std::optional<vgr::Pose>& flange)
       : io_(io), opt_(std::move(opt)), dialect_(dialect), socket_(io), timer_(io), signals_(io, SIGINT, SIGTERM) {
+    namespace bin = vgr::protocol::binary;
+    const std::string what = flange ? "TRIG," + std::to_string(opt_.job) + "," + snapshotPoseText(dialect_, *flange)
+                                    : "GET," + std::to_string(opt_.job);
     switch (dialect_) {
-      case Dialect::Ur: request_ = "GET," + std::to_string(opt_.job) + "\n"; break;
-      case Dialect::Fanuc: request_ = "GET," + std::to_string(opt_.job) + "\r\n"; break;
-      case Dialect::Binary: request_ = vgr::protocol::binary::encodeRequest(vgr::protocol::binary::kCmdGet, opt_.job); break;
-      default: request_ = "GET," + std::to_string(opt_.job) + "#"; break;
+      case Dialect::Ur: request_ = what + "\n"; break;
+      case Dialect::Fanuc: request_ = what + "\r\n"; break;
+      case Dialect::Binary: request_ = bin::encodeRequest(flange ? bin::kCmdTrigger : bin::kCmdGet, opt_.job, flange); break;
+      default: request_ = what + "#"; break;
     }
   }
 
@@ -368,7 +415,7 @@ class SimRobot {
     ++replies_;
     Parsed p;
     if (failure.empty()) {
-      p = parseReply(dialect_, rawBytes);
+      p = parseReply(dialect_, opt_.abbRotation == "quaternion", rawBytes);
     } else {
       p.error = failure;
     }
@@ -391,14 +438,16 @@ class SimRobot {
         line["y_mm"] = p.yMm;
         line["z_mm"] = p.zMm;
         line["rz_deg"] = p.rzDeg;
+        line["ry_deg"] = p.ryDeg;
+        line["rx_deg"] = p.rxDeg;
       } else {
         line["error"] = p.error;
       }
       line["raw"] = raw;
       std::cout << line.dump(-1, ' ', false, Json::error_handler_t::replace) << std::endl;
     } else if (p.valid) {
-      std::cout << fmt::format("{} #{} valid status={} cycle={} x={:.3f} y={:.3f} z={:.3f} rz={:.3f} raw={}", opt_.name,
-                               replies_, p.status, p.cycle, p.xMm, p.yMm, p.zMm, p.rzDeg, raw)
+      std::cout << fmt::format("{} #{} valid status={} cycle={} x={:.3f} y={:.3f} z={:.3f} rz={:.3f} ry={:.3f} rx={:.3f} raw={}",
+                               opt_.name, replies_, p.status, p.cycle, p.xMm, p.yMm, p.zMm, p.rzDeg, p.ryDeg, p.rxDeg, raw)
                 << std::endl;
     } else {
       std::cout << opt_.name << " #" << replies_ << " INVALID (" << p.error
@@ -461,6 +510,11 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(1, 3600000));
   app.add_flag("--json", opt.json, "one JSON object per line");
+  app.add_option("--abb-rotation", opt.abbRotation, "abb: the reply's rotation, zyx (rz, ry, rx) or quaternion (q1..q4)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"zyx", "quaternion"}));
+  app.add_option("--snapshot", opt.snapshot,
+                 "eye-in-hand: send TRIG,<job>,<flange pose> instead of GET; the pose as x,y,z,qw,qx,qy,qz (mm, quaternion)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -470,10 +524,32 @@ int main(int argc, char** argv) {
   const std::optional<Dialect> dialect = vgr::protocol::parseDialect(opt.dialect);
   if (!dialect) return 2;  // unreachable: checked by CLI11
   if (opt.name.empty()) opt.name = opt.dialect;
+  std::optional<vgr::Pose> flange;
+  if (!opt.snapshot.empty()) {
+    std::vector<double> v;
+    std::string_view rest(opt.snapshot);
+    while (!rest.empty()) {
+      const std::size_t comma = rest.find(',');
+      const std::string_view f = rest.substr(0, comma);
+      double d = 0;
+      const auto res = std::from_chars(f.data(), f.data() + f.size(), d);
+      if (res.ec != std::errc{} || res.ptr != f.data() + f.size()) break;
+      v.push_back(d);
+      if (comma == std::string_view::npos) break;
+      rest.remove_prefix(comma + 1);
+    }
+    const double n = v.size() == 7 ? std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5] + v[6] * v[6]) : 0.0;
+    if (v.size() != 7 || std::abs(n - 1.0) > 1e-3) {
+      std::cerr << "vgr-sim-robot: --snapshot: expected x,y,z,qw,qx,qy,qz (mm, a unit quaternion), got '" << opt.snapshot
+                << "'\n";
+      return 2;
+    }
+    flange = vgr::poseFromQuaternion(v[0], v[1], v[2], v[3], v[4], v[5], v[6]);
+  }
 
   try {
     asio::io_context io;
-    SimRobot robot(io, opt, *dialect);
+    SimRobot robot(io, opt, *dialect, flange);
     robot.start();
     io.run();
     return robot.exitCode();

@@ -21,6 +21,7 @@
 
 #include "config/cell_config.hpp"
 #include "core/child_process.hpp"
+#include "core/pose.hpp"
 #include "sim/cell_scenes.hpp"
 #include "sim/dataset.hpp"
 
@@ -49,6 +50,17 @@ double percentile(std::vector<double> v, double q) {
 double angleDiffDeg(double a, double b) { return std::abs(std::remainder(a - b, 360.0)); }
 
 double round3(double v) { return std::round(v * 1000.0) / 1000.0; }
+
+// The rotation of a journal part (or a vgr-sim-robot line): rz_deg, ry_deg, rx_deg, Z-Y-X.
+Pose journalRotation(const json& j) {
+  return poseFromEulerZyxDeg(0, 0, 0, EulerZyxDeg{j.value("rz_deg", 0.0), j.value("ry_deg", 0.0), j.value("rx_deg", 0.0)});
+}
+
+// The angle of a^-1 b, degrees [0, 180].
+double rotationDiffDeg(const Pose& a, const Pose& b) {
+  const Pose d = compose(inverse(a), b);
+  return 2.0 * std::acos(std::min(1.0, std::abs(d.qw))) * 180.0 / M_PI;
+}
 
 // A datagram socket standing in for systemd's NOTIFY_SOCKET: vgrd's READY=1 arrives here.
 class NotifyListener {
@@ -363,10 +375,13 @@ int runDemo(const DemoOptions& o) {
         ++t.mismatched;
         continue;
       }
+      // All six degrees of freedom: the position, and the angle between the two rotations
+      // (the robot's reply converted from its dialect's notation, the journal's Z-Y-X).
       const auto& part = jit->second["parts"][0];
       if (std::abs(part.value("x_mm", 0.0) - j.value("x_mm", 1e9)) > 0.01 ||
           std::abs(part.value("y_mm", 0.0) - j.value("y_mm", 1e9)) > 0.01 ||
-          angleDiffDeg(part.value("rz_deg", 0.0), j.value("rz_deg", 1e9)) > 0.01)
+          std::abs(part.value("z_mm", 0.0) - j.value("z_mm", 1e9)) > 0.01 ||
+          rotationDiffDeg(journalRotation(part), journalRotation(j)) > 0.01)
         ++t.mismatched;
     }
     if (t.invalid || t.mismatched || t.ok == 0) robotsOk = false;
