@@ -81,9 +81,10 @@ std::unique_ptr<PixelMapping> eyeInHandMapping(const EyeInHandPlaneMapping& mapp
 Result<std::unique_ptr<PixelMapping>> loadCalibrationMapping(const std::string& intrinsicsPath,
                                                              const std::string& handEyePath,
                                                              const std::string& planePath) {
+  // The configuration decides the mapping; any file's problem is reported in the order the
+  // fixed camera's loader checks them (intrinsics, hand-eye, plane).
   auto he = readHandEye(handEyePath);
-  if (!he) return std::unexpected(he.error());
-  if (he->config == HandEyeConfig::EyeInHand) {
+  if (he && he->config == HandEyeConfig::EyeInHand) {
     auto m = loadEyeInHandCalibration(intrinsicsPath, handEyePath, planePath);
     if (!m) return std::unexpected(m.error());
     return eyeInHandMapping(*m);
