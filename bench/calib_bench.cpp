@@ -10,6 +10,8 @@
 #include <random>
 
 #include <CLI/CLI.hpp>
+
+#include "core/cli.hpp"
 #include <fmt/core.h>
 #include <opencv2/calib3d.hpp>
 
@@ -341,11 +343,12 @@ void mappingTable(int seeds) {
 
 int main(int argc, char** argv) {
   CLI::App app{"vgr-bench-calib: calibration accuracy tables (docs/calibration.md)"};
+  vgr::cli::showDefaults(app);
   int seeds = 20;
   std::string only;
   app.add_option("--seeds", seeds, "random data sets per row")->check(CLI::Range(1, 1000));
   app.add_option("--only", only, "one table: intrinsics, handeye, handeye-cloud or mapping (default: all)");
-  CLI11_PARSE(app, argc, argv);
+  if (const auto rc = vgr::cli::parse(app, argc, argv)) return *rc;
   if (only.empty() || only == "intrinsics") intrinsicsTable(seeds);
   if (only.empty() || only == "handeye") handEyeTable(seeds);
   if (only.empty() || only == "handeye-cloud") handEyeCloudTable(seeds);

@@ -14,6 +14,8 @@
 #include <vector>
 
 #include <CLI/CLI.hpp>
+
+#include "core/cli.hpp"
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
@@ -36,6 +38,7 @@ double pct(std::vector<double> v, double p) {
 
 int main(int argc, char** argv) {
   CLI::App app{"vgr-bench-camera: trigger->frame latency and frame rate over loopback GigE Vision"};
+  vgr::cli::showDefaults(app);
   int width = 2448, height = 2048, triggers = 300, packetSize = 16384, seconds = 5;
   double fps = 1000;
   bool render = false;
@@ -48,7 +51,7 @@ int main(int argc, char** argv) {
   app.add_option("--fps", fps, "emulator free-run rate (an upper bound)");
   app.add_option("--pixel-format", pixelFormat, "Mono8 or Mono16");
   app.add_flag("--render", render, "serve rendered scenes instead of a pre-rendered image");
-  CLI11_PARSE(app, argc, argv);
+  if (const auto rc = vgr::cli::parse(app, argc, argv)) return *rc;
 
   namespace fs = std::filesystem;
   const std::string bin = fs::canonical("/proc/self/exe").parent_path().string();

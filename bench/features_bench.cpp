@@ -12,6 +12,8 @@
 #include <vector>
 
 #include <CLI/CLI.hpp>
+
+#include "core/cli.hpp"
 #include <fmt/core.h>
 #include <opencv2/core.hpp>
 
@@ -20,6 +22,7 @@
 
 int main(int argc, char** argv) {
   CLI::App app{"Localization methods on synthetic textured parts"};
+  vgr::cli::showDefaults(app);
   int count = 100;
   unsigned seed = 1;
   double angle = 60, noise = 5, posTol = 4, angTol = 0.5;
@@ -37,7 +40,7 @@ int main(int argc, char** argv) {
   app.add_option("--pos-tol", posTol, "success: position error <= px");
   app.add_option("--ang-tol", angTol, "success: angle error <= deg");
   app.add_option("--method", methods, "methods (default: all but moments)");
-  CLI11_PARSE(app, argc, argv);
+  if (const auto rc = vgr::cli::parse(app, argc, argv)) return *rc;
   if (methods.empty())
     for (const auto& m : vgr::vision::locatorMethods())
       if (m != "moments") methods.push_back(m);

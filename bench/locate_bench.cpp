@@ -15,6 +15,8 @@
 #include <vector>
 
 #include <CLI/CLI.hpp>
+
+#include "core/cli.hpp"
 #include <fmt/core.h>
 #include <opencv2/core.hpp>
 
@@ -43,6 +45,7 @@ double median(std::vector<double> v) {
 
 int main(int argc, char** argv) {
   CLI::App app{"vgr-bench-locate: localization methods on the same rendered images"};
+  vgr::cli::showDefaults(app);
   int width = 2448, height = 2048, images = 100;
   double sigma = 5, range = 180, focal = 2400, camHeight = 800, templateAngle = 0;
   std::uint64_t seed = 1;
@@ -64,7 +67,7 @@ int main(int argc, char** argv) {
   app.add_option("--template-angle", templateAngle, "deg, the part in the template image (CCW as displayed)");
   app.add_option("--methods", methods, "methods to run (default: all of locatorMethods())");
   app.add_option("--param", params, "method parameter NAME=VALUE (every method gets it)");
-  CLI11_PARSE(app, argc, argv);
+  if (const auto rc = vgr::cli::parse(app, argc, argv)) return *rc;
   if (methods.empty()) methods = vgr::vision::locatorMethods();
 
   const auto renderer = vgr::sim::makeRenderer(width, height, focal, camHeight, sigma, seed);

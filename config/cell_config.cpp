@@ -166,6 +166,15 @@ bool validToken(const std::string& t) {
   return true;
 }
 
+// The address in its canonical text (inet_ntop of inet_pton), "" when it is not one.
+std::string normalIpAddress(const std::string& text) {
+  unsigned char buf[16];
+  char out[INET6_ADDRSTRLEN] = {};
+  if (::inet_pton(AF_INET, text.c_str(), buf) == 1) return ::inet_ntop(AF_INET, buf, out, sizeof out) ? out : "";
+  if (::inet_pton(AF_INET6, text.c_str(), buf) == 1) return ::inet_ntop(AF_INET6, buf, out, sizeof out) ? out : "";
+  return "";
+}
+
 bool validIpAddress(const std::string& text) {
   unsigned char buf[16];
   return ::inet_pton(AF_INET, text.c_str(), buf) == 1 || ::inet_pton(AF_INET6, text.c_str(), buf) == 1;
@@ -335,6 +344,38 @@ void parseWeb(Section s, WebConfig& w) {
   int port = w.port;
   s.read<int>("port", port, inRange(1, 65535), "[1, 65535]");
   w.port = static_cast<std::uint16_t>(port);
+  s.read<bool>("page", w.page);
+  s.read<bool>("actions", w.actions);
+  const YAML::Node allowed = s.get("allowed_clients");
+  if (allowed && !allowed.IsNull()) {
+    if (!allowed.IsSequence()) s.fail(allowed, "allowed_clients", "expected a list of IP addresses");
+    for (std::size_t i = 0; i < allowed.size(); ++i) {
+      const std::string key = "allowed_clients[" + std::to_string(i) + "]";
+      const std::string text = allowed[i].IsScalar() ? allowed[i].Scalar() : std::string("<non-scalar>");
+      const std::string normal = allowed[i].IsScalar() ? normalIpAddress(text) : "";
+      if (normal.empty()) s.fail(allowed[i], key, "expected a numeric IP address, got '" + text + "'");
+      w.allowedClients.push_back(normal);
+    }
+  }
+  if (w.actions && w.allowedClients.empty())
+    s.fail(s.get("actions"), "actions", "operator actions need 'allowed_clients': the addresses allowed to trigger and switch jobs");
+  if (w.actions && !w.page) s.fail(s.get("actions"), "actions", "operator actions are part of the page: not with 'page: false'");
+  s.read<int>("live_max_width", w.liveMaxWidth, inRange(160, 8192), "[160, 8192]");
+  s.finish();
+}
+
+void parseArchive(Section s, ArchiveConfig& a, const std::string& file) {
+  if (!s.node() || s.node().IsNull()) return;
+  a.enabled = true;
+  s.read<bool>("enabled", a.enabled);
+  s.read<std::string>("dir", a.dir);
+  if (!a.dir.empty() && std::filesystem::path(a.dir).is_relative())
+    a.dir = (std::filesystem::path(file).parent_path() / a.dir).lexically_normal().string();
+  double quotaMb = static_cast<double>(a.quotaBytes) / 1e6;
+  s.read<double>("quota_mb", quotaMb, inRange(1.0, 1e7), "[1, 10000000] (MB = 10^6 bytes)");
+  a.quotaBytes = static_cast<std::uint64_t>(quotaMb * 1e6);
+  s.read<int>("every_nth_good", a.everyNthGood, inRange(0, 1000000), "[0, 1000000] (0 = failed cycles only)");
+  s.read<int>("queue", a.queue, inRange(1, 64), "[1, 64]");
   s.finish();
 }
 
@@ -434,6 +475,7 @@ CellConfig parse(const YAML::Node& root, const std::string& file) {
   }
   parseWeb(Section(file, top.get("web"), "web"), c.web);
   parseMqtt(Section(file, top.get("mqtt"), "mqtt"), c.mqtt);
+  parseArchive(Section(file, top.get("archive"), "archive"), c.archive, file);
   top.finish();
   return c;
 }

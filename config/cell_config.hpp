@@ -186,12 +186,32 @@ struct CalibrationFilesConfig {
   std::string multiHeight; // multiheight.yaml (paper 001, section 4.1); excludes the three above
 };
 
-// vgrd's HTTP server (daemon/web_server.hpp): /metrics for Prometheus, read-only. Off
-// unless the `web` section is present (then on unless `enabled: false`).
+// vgrd's HTTP server (daemon/web_server.hpp): /metrics for Prometheus and the
+// commissioning page with its JSON and WebSocket API (docs/commissioning.md), read-only
+// unless `actions` is on. Off unless the `web` section is present (then on unless
+// `enabled: false`).
 struct WebConfig {
   bool enabled = false;
   std::string bind = "127.0.0.1";  // numeric IPv4/IPv6 address; 0.0.0.0 for a plant network
   std::uint16_t port = 8080;       // [1, 65535]
+  bool page = true;                // the commissioning page, /api/... and /ws; false = /metrics only
+  // Operator actions (POST /api/trigger, /api/job) from the addresses in allowedClients
+  // only; others get 403, and every client gets 405 while actions are off.
+  bool actions = false;
+  std::vector<std::string> allowedClients;  // numeric IP addresses (normalised); required with actions
+  int liveMaxWidth = 1280;         // px, [160, 8192]: the page's images are scaled down to this width
+};
+
+// The image archive (daemon/image_archive.hpp, docs/commissioning.md): the frames of failed
+// cycles and every N-th good one as lossless PNG (the 8-bit image the locator saw), each
+// with its journal line beside it, under a disk quota (oldest deleted first). Off unless
+// the `archive` section is present (then on unless `enabled: false`).
+struct ArchiveConfig {
+  bool enabled = false;
+  std::string dir;                 // "" = "archive" next to the journal (vgrd's --journal included); relative: to the config file's folder
+  std::uint64_t quotaBytes = 1000000000;  // archive.quota_mb (MB = 10^6 bytes), [1, 10^7] MB
+  int everyNthGood = 100;          // [0, 10^6]: keep every N-th OK cycle's frame too; 0 = failed ones only
+  int queue = 8;                   // frames, [1, 64]: waiting for the disk; a frame beyond is dropped (counted)
 };
 
 // vgrd's MQTT sink (daemon/mqtt_sink.hpp, docs/plant.md): every result as JSON on
@@ -235,6 +255,7 @@ struct CellConfig {
   SimConfig sim;
   CalibrationFilesConfig calibration;  // optional section `calibration`
   WebConfig web;                       // optional section `web`
+  ArchiveConfig archive;               // optional section `archive`
   MqttConfig mqtt;                     // optional section `mqtt`
 
   const JobConfig* findJob(int id) const;

@@ -41,6 +41,9 @@ struct CycleResult {
   std::vector<PartResult> parts;  // best first
   double grabMs = 0, locateMs = 0, totalMs = 0;
   std::chrono::system_clock::time_point triggerTime;
+  // The frame went to the image archive (vgrd's daemon/image_archive.hpp): the journal line
+  // names its file ("archive"), derived from cycleId and triggerTime.
+  bool archived = false;
 };
 
 }  // namespace vgr

@@ -44,7 +44,7 @@ WarmSize warmUpSize(const config::CellConfig& cell, const vision::calib::PixelMa
 }  // namespace
 
 CycleRunner::CycleRunner(const config::CellConfig& cell, drivers::CameraWorker& camera, CycleSinks sinks)
-    : cell_(cell), camera_(camera), sinks_(std::move(sinks)) {
+    : cell_(cell), camera_(camera), sinks_(std::move(sinks)), defaultJob_(cell.jobs.empty() ? 0 : cell.jobs.front().id) {
   auto m = makeCellMapping(cell);
   if (m) {
     mapping_ = std::move(*m);
@@ -87,7 +87,12 @@ Result<void> CycleRunner::prepareJobs() {
   }
   return {};
 }
-void CycleRunner::start() { thread_ = std::thread([this] { run(); }); }
+void CycleRunner::start() {
+  thread_ = std::thread([this] {
+    nameThisThread("vgr-cycle");
+    run();
+  });
+}
 
 void CycleRunner::stop() {
   {
@@ -98,6 +103,17 @@ void CycleRunner::stop() {
   if (thread_.joinable()) thread_.join();
 }
 
+Result<void> CycleRunner::setDefaultJob(int jobId) {
+  if (cell_.findJob(jobId) == nullptr) return fail(Status::JobNotFound, fmt::format("job {} is not configured", jobId));
+  const int before = defaultJob_.exchange(jobId);
+  if (before != jobId) log::info("cycle", "default job {} -> {} (JOB_ID 0, the operator's trigger)", before, jobId);
+  return {};
+}
+
+std::chrono::milliseconds CycleRunner::stallLimit() const {
+  return milliseconds(cell_.cycleDeadlineMs) + milliseconds(2000);
+}
+
 std::uint32_t firstCycleIdAfter(std::uint32_t last) { return last == 0 || last >= kMaxCycleId ? 1 : last + 1; }
 
 void CycleRunner::setFirstCycleId(std::uint32_t id) {
@@ -106,8 +122,9 @@ void CycleRunner::setFirstCycleId(std::uint32_t id) {
 }
 
 std::uint32_t CycleRunner::submit(int jobId, TriggerSource source, const std::optional<Pose>& flange) {
-  // JOB_ID 0 (a PLC that never wrote HR1) runs the cell's first job.
-  if (jobId == 0 && !cell_.jobs.empty()) jobId = cell_.jobs.front().id;
+  // JOB_ID 0 (a PLC that never wrote HR1, SIGUSR1, the page's trigger) runs the default job:
+  // the cell's first, or the one the operator switched to (setDefaultJob).
+  if (jobId == 0) jobId = defaultJob_.load();
   std::uint32_t id;
   {
     std::lock_guard lock(mutex_);
@@ -128,7 +145,10 @@ void CycleRunner::run() {
     Trigger t;
     {
       std::unique_lock lock(mutex_);
-      cv_.wait(lock, [this] { return stopping_ || !queue_.empty(); });
+      // Bounded waits, a beat at each: an idle cycle thread is alive (daemon/watchdog.hpp).
+      heartbeat_.beat();
+      while (!cv_.wait_for(lock, kIdleBeat, [this] { return stopping_ || !queue_.empty(); })) heartbeat_.beat();
+      heartbeat_.beat();
       if (queue_.empty()) return;  // stopping with nothing left
       t = queue_.front();
       queue_.pop_front();
@@ -140,17 +160,18 @@ void CycleRunner::run() {
         r.status = Status::Internal;
         r.triggerTime = t.wallAt;
         lock.unlock();
-        if (sinks_.onResult) sinks_.onResult(r);
+        if (sinks_.onResult) sinks_.onResult(r, cv::Mat());
         continue;
       }
     }
     if (sinks_.onStarted) sinks_.onStarted(t.cycleId, t.jobId);
-    const CycleResult r = runCycle(t);
-    if (sinks_.onResult) sinks_.onResult(r);
+    cv::Mat image;
+    CycleResult r = runCycle(t, image);
+    if (sinks_.onResult) sinks_.onResult(r, image);
   }
 }
 
-CycleResult CycleRunner::runCycle(const Trigger& t) {
+CycleResult CycleRunner::runCycle(const Trigger& t, cv::Mat& shown) {
   CycleResult r;
   r.cycleId = t.cycleId;
   r.jobId = t.jobId;
@@ -203,6 +224,7 @@ CycleResult CycleRunner::runCycle(const Trigger& t) {
     vision::toGray8(wide, frame_.bitDepth, gray8);
     image = gray8;
   }
+  shown = image;
   auto found = job->second.locator->locate(image);
   r.locateMs = msSince(locateStart);
   if (!found) return end(found.error().code, found.error().message);

@@ -26,6 +26,7 @@
 
 #include "config/cell_config.hpp"
 #include "core/cycle.hpp"
+#include "core/heartbeat.hpp"
 #include "drivers/camera_worker.hpp"
 #include "vision/calib/pixel_mapping.hpp"
 #include "vision/locate/locator.hpp"
@@ -36,8 +37,10 @@ namespace vgr::daemon {
 struct CycleSinks {
   // Cycle thread, when a cycle starts (the result is pending). Must not block.
   std::function<void(std::uint32_t cycleId, int jobId)> onStarted;
-  // Cycle thread, once per accepted trigger. Must not block for long.
-  std::function<void(const CycleResult&)> onResult;
+  // Cycle thread, once per accepted trigger. Must not block for long. `image` is the 8-bit
+  // gray image the locator was given (valid during the call only; empty when the cycle had
+  // no frame); a sink may set r.archived (the image archive took the frame).
+  std::function<void(CycleResult& r, const cv::Mat& image)> onResult;
 };
 
 // The cycle id after `last` (0: none yet): last + 1, wrapping to 1 after kMaxCycleId
@@ -66,6 +69,19 @@ class CycleRunner {
 
   std::uint64_t overruns() const { return overruns_.load(); }
 
+  // The job a trigger with job 0 runs (Modbus JOB_ID 0, SIGUSR1, the page's trigger): the
+  // cell's first job until the operator switches it (the page's "switch job"). Any thread.
+  // Robots keep their own `job` (cell config) until they send JOB,<n>. Error: JOB_NOT_FOUND.
+  Result<void> setDefaultJob(int jobId);
+  int defaultJob() const { return defaultJob_.load(); }
+  // Beaten by the cycle thread at least every kIdleBeat while idle and after every cycle;
+  // read by vgrd's watchdog (daemon/watchdog.hpp). A cycle ends by its deadline (the grab
+  // waits at most until then; a locator overrunning it is -5 but still has to return), so
+  // the longest legitimate silence is one deadline: stallLimit() = cycle_deadline_ms + 2 s.
+  const Heartbeat& heartbeat() const { return heartbeat_; }
+  std::chrono::milliseconds stallLimit() const;
+  static constexpr std::chrono::milliseconds kIdleBeat{500};
+
   // Before start(): the id of the first cycle (vgrd: firstCycleIdAfter(the journal's last
   // cycle), so ids do not repeat across restarts). Outside [1, kMaxCycleId]: 1.
   void setFirstCycleId(std::uint32_t id);
@@ -80,7 +96,9 @@ class CycleRunner {
     std::chrono::system_clock::time_point wallAt;
   };
   void run();
-  CycleResult runCycle(const Trigger& t);
+  // image: set to the image the locator was given (a view of frame_ or the converted
+  // Mono16 frame) once a frame of the right size was grabbed; left empty otherwise.
+  CycleResult runCycle(const Trigger& t, cv::Mat& image);
 
   const config::CellConfig& cell_;
   drivers::CameraWorker& camera_;
@@ -96,6 +114,8 @@ class CycleRunner {
   bool stopping_ = false;
   std::uint32_t nextCycleId_ = 1;
   std::atomic<std::uint64_t> overruns_{0};
+  std::atomic<int> defaultJob_;
+  Heartbeat heartbeat_;
   drivers::Frame frame_;
   struct PreparedJob {
     std::unique_ptr<vision::Locator> locator;

@@ -43,4 +43,20 @@ Result<std::unique_ptr<vision::Locator>> makeJobLocator(const config::JobConfig&
   return std::move(*loc);
 }
 
+vision::OverlayJob overlayJobFor(const config::JobFile& job) {
+  vision::OverlayJob o;
+  o.searchRoi = job.taught.searchRoi;
+  o.templateGrasp = job.taught.grasp;
+  const cv::Mat templ = vision::readGray8(job.templatePath()).value_or(cv::Mat());
+  o.templateWidth = templ.cols;
+  o.templateHeight = templ.rows;
+  return o;
+}
+
+vision::OverlayJob overlayJobFor(const config::JobConfig& job) {
+  if (job.folder.empty()) return {};
+  auto jf = config::loadJob(job.folder);
+  return jf ? overlayJobFor(*jf) : vision::OverlayJob{};
+}
+
 }  // namespace vgr::daemon

@@ -16,6 +16,7 @@
 #include "config/job.hpp"
 #include "core/result.hpp"
 #include "vision/locate/locator.hpp"
+#include "vision/overlay.hpp"
 
 namespace vgr::daemon {
 
@@ -26,5 +27,11 @@ Result<std::unique_ptr<vision::Locator>> makeJobLocator(const config::JobFile& j
 // parameter 'x' (FILE:LINE: ...)", "FOLDER/template.png: cannot read the template image", or
 // the job.yaml loader's line.
 Result<std::unique_ptr<vision::Locator>> makeJobLocator(const config::JobConfig& job);
+
+// What the overlay picture (vision/overlay.hpp) draws of a job: its search ROI, and its
+// template's size and grasp point (the found part's outline). A job without a folder has
+// neither (an empty OverlayJob). Reads the template image; start-up code, any one thread.
+vision::OverlayJob overlayJobFor(const config::JobFile& job);
+vision::OverlayJob overlayJobFor(const config::JobConfig& job);
 
 }  // namespace vgr::daemon

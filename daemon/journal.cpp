@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/log.hpp"
+#include "daemon/image_archive.hpp"
 
 namespace vgr::daemon {
 
@@ -118,6 +119,7 @@ std::string Journal::toJson(const CycleResult& r) {
     j["flange"] = {{"x_mm", round3(r.flange->x)}, {"y_mm", round3(r.flange->y)}, {"z_mm", round3(r.flange->z)},
                    {"rz_deg", round3(e.rz)}, {"ry_deg", round3(e.ry)}, {"rx_deg", round3(e.rx)}};
   }
+  if (r.archived) j["archive"] = archiveStem(r.cycleId, r.triggerTime) + ".png";
   return j.dump();
 }
 

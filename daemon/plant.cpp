@@ -4,8 +4,10 @@
 #include "core/version.hpp"
 #include "drivers/camera_worker.hpp"
 #include "daemon/cycle_runner.hpp"
+#include "daemon/image_archive.hpp"
 #include "daemon/metrics.hpp"
 #include "daemon/mqtt_sink.hpp"
+#include "daemon/web_page.hpp"
 #include "daemon/web_server.hpp"
 
 namespace vgr::daemon {
@@ -80,15 +82,49 @@ Result<void> Plant::start(PlantSources src) {
     });
   }
 
+  if (src.archive != nullptr) {
+    const ImageArchive* archive = src.archive;
+    metrics_->addSampler([archive](std::vector<SampledMetric>& out) {
+      const ArchiveCounters a = archive->counters();
+      auto add = [&](const char* name, const char* help, std::uint64_t v, T type) {
+        out.push_back({name, help, type, {}, static_cast<double>(v)});
+      };
+      add("vgr_archive_bytes", "Bytes of frames in the image archive (PNG + journal line)", a.bytes, T::Gauge);
+      add("vgr_archive_quota_bytes", "The image archive's quota", a.quotaBytes, T::Gauge);
+      add("vgr_archive_files", "Frames in the image archive", a.files, T::Gauge);
+      add("vgr_archive_queued", "Frames waiting for the disk", a.queued, T::Gauge);
+      add("vgr_archive_written_total", "Frames written to the image archive", a.written, T::Counter);
+      add("vgr_archive_dropped_total", "Frames to keep that were dropped: the archive's queue was full", a.dropped, T::Counter);
+      add("vgr_archive_deleted_total", "Frames deleted for the quota, oldest first", a.deleted, T::Counter);
+      add("vgr_archive_write_errors_total", "Frames that could not be written", a.writeErrors, T::Counter);
+    });
+  }
+
   if (cell_.web.enabled) {
     web_ = std::make_unique<WebServer>(io_, WebOptions{cell_.web.bind, cell_.web.port});
     Metrics* metrics = metrics_.get();
-    web_->route("/metrics", [metrics](const HttpRequest&) { return HttpReply{200, Metrics::kContentType, metrics->render()}; });
-    web_->route("/", [](const HttpRequest&) {
-      return HttpReply{200, "text/plain; charset=utf-8", "vgrd " + std::string(buildVersion()) + "\n/metrics\n"};
-    });
+    web_->route("/metrics", [metrics](const HttpRequest&) { return HttpReply{200, Metrics::kContentType, metrics->render(), {}}; });
+    if (cell_.web.page) {
+      WebPageSources ps;
+      ps.cell = &cell_;
+      ps.version = buildVersion();
+      ps.camera = src.camera;
+      ps.archive = src.archive;
+      ps.ready = src.ready;
+      ps.trigger = src.trigger;
+      ps.setDefaultJob = src.setDefaultJob;
+      ps.defaultJob = src.defaultJob;
+      page_ = std::make_unique<WebPage>(io_, *web_, cell_.web, std::move(ps));
+      for (auto& [name, fill] : sections_) page_->addStatusSection(name, std::move(fill));
+      page_->start();
+    } else {
+      web_->route("/", [](const HttpRequest&) {
+        return HttpReply{200, "text/plain; charset=utf-8", "vgrd " + std::string(buildVersion()) + "\n/metrics\n", {}};
+      });
+    }
     if (auto r = web_->start(); !r) return r;
-    log::info("main", "{} serving /metrics", web_->describe());
+    log::info("main", "{} serving /metrics{}{}", web_->describe(), cell_.web.page ? " and the commissioning page" : "",
+              cell_.web.actions ? " (operator actions on)" : "");
   }
 
   if (cell_.mqtt.enabled) {
@@ -132,12 +168,19 @@ void Plant::pollStatus() {
 }
 
 void Plant::stop() {
+  if (page_) page_->stop();
   if (web_) web_->stop();
   if (statusTimer_) statusTimer_->cancel();
   if (mqtt_) mqtt_->stop();
 }
 
 void Plant::cycleDone(const CycleResult& r) { metrics_->cycleDone(r); }
+
+void Plant::frameDone(const CycleResult& r, const cv::Mat& image) {
+  if (page_) page_->frameDone(r, image);
+}
+
+void Plant::addStatusSection(const std::string& name, StatusSection fill) { sections_.emplace_back(name, std::move(fill)); }
 
 void Plant::resultDelivered(const CycleResult& r) {
   if (mqtt_) {

@@ -3,6 +3,7 @@
 #include <systemd/sd-daemon.h>
 
 #include <cmath>
+#include <filesystem>
 #include <cstdlib>
 #include <set>
 #include <vector>
@@ -11,12 +12,15 @@
 #include <boost/asio/post.hpp>
 #include <boost/asio/signal_set.hpp>
 #include <boost/asio/steady_timer.hpp>
+#include <opencv2/core.hpp>
 
 #include "core/log.hpp"
 #include "daemon/cycle_runner.hpp"
+#include "daemon/image_archive.hpp"
 #include "daemon/journal.hpp"
 #include "daemon/plc_links.hpp"
 #include "daemon/result_store.hpp"
+#include "daemon/watchdog.hpp"
 #include "drivers/camera.hpp"
 #include "daemon/plant.hpp"
 #include "drivers/camera_worker.hpp"
@@ -42,22 +46,28 @@ struct VgrdApp::Impl {
   // The PLC side: the Modbus server and/or client mode, behind one interface.
   std::vector<std::unique_ptr<protocol::PlcLink>> plcs;
   std::vector<std::unique_ptr<protocol::RobotServer>> robots;
-  std::unique_ptr<Plant> plant;  // metrics + web server (daemon/plant.hpp)
+  std::unique_ptr<Plant> plant;  // metrics + web server + page (daemon/plant.hpp)
+  std::unique_ptr<ImageArchive> archive;  // when the config has an `archive` section
   bool notifiedReady = false;
-  std::uint64_t watchdogUsec = 0;
+  std::uint64_t watchdogUsec = 0;  // systemd's WatchdogSec in µs; 0 = not asked for pings
+  Watchdog watchdog;               // every long-lived thread's heartbeat (daemon/watchdog.hpp)
+  bool stallReported = false;
 
   explicit Impl(config::CellConfig c) : cfg(std::move(c)) {}
 
-  void publish(const CycleResult& r) {
-    // Cycle thread. PLC first (one lock inside each link), then robots (posted to the I/O
-    // thread), then the journal (disk) last. A PLC gets the results of the cycles it
-    // triggered (a robot's or the operator's cycle would raise RESULT_VALID for a trigger
-    // the PLC never sent); robots and the journal get every result.
+  void publish(CycleResult& r, const cv::Mat& image) {
+    // Cycle thread. PLC first (one lock inside each link), then the frame's copies (archive,
+    // web page: a memcpy each, no encoding here), then robots (posted to the I/O thread),
+    // then the journal (disk) last. A PLC gets the results of the cycles it triggered (a
+    // robot's or the operator's cycle would raise RESULT_VALID for a trigger the PLC never
+    // sent); robots and the journal get every result.
     plant->cycleDone(r);  // metrics first (atomic adds): a scrape after RESULT_VALID sees this cycle
     if (r.trigger == TriggerSource::Modbus && !plcs.empty()) {
       const protocol::ModbusResult m = protocol::modbusResultFrom(r);
       for (auto& plc : plcs) plc->publishResult(m);
     }
+    if (archive) r.archived = archive->offer(r, image);
+    plant->frameDone(r, image);
     asio::post(io, [this, r] { results->onResult(r); });
     journal.append(r);
     plant->resultDelivered(r);  // MQTT (the JSON payload costs the cycle thread ~tens of µs): after the PLC
@@ -103,12 +113,37 @@ struct VgrdApp::Impl {
     });
   }
 
-  void kickWatchdog() {
-    sd_notify(0, "WATCHDOG=1");
-    watchdogTimer.expires_after(std::chrono::microseconds(watchdogUsec / 2));
+  // I/O thread, every checkPeriod(): WATCHDOG=1 only while every watched thread beats
+  // within its stall limit (the I/O thread proves itself by running this). A stall is
+  // logged once when it starts (naming the thread) and once when it ends; systemd, which
+  // gets no pings meanwhile, kills vgrd WatchdogSec after the last one.
+  void checkWatchdog() {
+    const auto stalls = watchdog.stalled(Watchdog::Clock::now());
+    if (stalls.empty()) {
+      if (stallReported) {
+        log::info("main", "watchdog: every thread makes progress again; pings resumed");
+        sd_notify(0, "STATUS=running");
+      }
+      stallReported = false;
+      if (watchdogUsec > 0) sd_notify(0, "WATCHDOG=1");
+    } else if (!stallReported) {
+      stallReported = true;
+      const Watchdog::Stall& s = stalls.front();
+      log::error("main", "watchdog: the {} thread has made no progress for {} ms (limit {} ms){}", s.thread,
+                 s.silentFor.count(), s.limit.count(),
+                 watchdogUsec > 0 ? "; WATCHDOG=1 withheld, systemd will restart vgrd" : "");
+      sd_notifyf(0, "STATUS=%s thread stalled", s.thread.c_str());
+    }
+    watchdogTimer.expires_after(checkPeriod());
     watchdogTimer.async_wait([this](const boost::system::error_code& ec) {
-      if (!ec) kickWatchdog();
+      if (!ec) checkWatchdog();
     });
+  }
+  // A quarter of WatchdogSec (systemd's advice is half; a quarter leaves room for a late
+  // timer), at most 1 s, so a stall is noticed within a second of its limit.
+  std::chrono::microseconds checkPeriod() const {
+    const std::uint64_t us = watchdogUsec > 0 ? std::min<std::uint64_t>(watchdogUsec / 4, 1'000'000) : 1'000'000;
+    return std::chrono::microseconds(std::max<std::uint64_t>(us, 10'000));
   }
 
   void logStats() {
@@ -119,6 +154,11 @@ struct VgrdApp::Impl {
               "{} abandoned; packets missing {}, resent {}; underruns {}; trigger overruns {}; journal write errors {}",
               c.completed, c.failed, c.timeouts, c.incomplete, c.retries, c.recovered, c.reconnects, c.abandoned,
               c.missingPackets, c.resentPackets, c.underruns, cycles->overruns(), journal.writeErrors());
+    if (archive) {
+      const ArchiveCounters a = archive->counters();
+      log::info("main", "archive: {} frames ({:.1f} of {:.1f} MB), {} written, {} dropped (queue full), {} deleted (quota), "
+                "{} write errors", a.files, a.bytes / 1e6, a.quotaBytes / 1e6, a.written, a.dropped, a.deleted, a.writeErrors);
+    }
     statsTimer.expires_after(std::chrono::seconds(60));
     statsTimer.async_wait([this](const boost::system::error_code& ec) {
       if (!ec) logStats();
@@ -132,6 +172,7 @@ VgrdApp::~VgrdApp() {
   // Order: stop producers of work before what they feed.
   for (auto& plc : impl_->plcs) plc->stop();
   if (impl_->cycles) impl_->cycles->stop();
+  if (impl_->archive) impl_->archive->stop();  // writes what is queued
   if (impl_->camera) impl_->camera->stop();
   for (auto& r : impl_->robots) r->stop();
   if (impl_->plant) impl_->plant->stop();
@@ -155,7 +196,7 @@ Result<void> VgrdApp::start() {
 
   CycleSinks sinks;
   sinks.onStarted = [&s](std::uint32_t id, int job) { asio::post(s.io, [&s, id, job] { s.results->onCycleStarted(id, job); }); };
-  sinks.onResult = [&s](const CycleResult& r) { s.publish(r); };
+  sinks.onResult = [&s](CycleResult& r, const cv::Mat& image) { s.publish(r, image); };
   s.cycles = std::make_unique<CycleRunner>(s.cfg, *s.camera, std::move(sinks));
   // Cycle ids continue after the journal's last one (unique in the journal, no RESULT_ID
   // repeated to the PLC after a restart).
@@ -204,12 +245,33 @@ Result<void> VgrdApp::start() {
     s.plcs.push_back(std::move(plc));
   }
 
-  PlantSources sources{s.camera.get(), s.cycles.get(), {}, [&s] { return s.notifiedReady; }};
+  if (s.cfg.archive.enabled) {
+    const std::string dir = s.cfg.archive.dir.empty()
+                                ? (std::filesystem::path(s.cfg.journalPath).parent_path() / "archive").string()
+                                : s.cfg.archive.dir;
+    s.archive = std::make_unique<ImageArchive>(s.cfg.archive, dir);
+    if (auto r = s.archive->start(); !r) return r;
+  }
+
+  PlantSources sources;
+  sources.camera = s.camera.get();
+  sources.cycles = s.cycles.get();
+  sources.ready = [&s] { return s.notifiedReady; };
+  sources.archive = s.archive.get();
+  sources.trigger = [&s](int jobId) {
+    return s.plant->triggered(TriggerSource::Operator, s.cycles->submit(jobId, TriggerSource::Operator));
+  };
+  sources.setDefaultJob = [&s](int jobId) { return s.cycles->setDefaultJob(jobId); };
+  sources.defaultJob = [&s] { return s.cycles->defaultJob(); };
   for (const auto& r : s.robots) sources.robots.push_back(r.get());
   if (auto r = s.plant->start(std::move(sources)); !r) return r;
 
   s.camera->start();
   s.cycles->start();
+  s.watchdog.watch("cycle", s.cycles->heartbeat(), s.cycles->stallLimit());
+  s.watchdog.watch("camera", s.camera->heartbeat(), drivers::CameraWorker::kStallLimit);
+  for (const auto& plc : s.plcs)
+    s.watchdog.watch(plc->describe(), plc->heartbeat(), plc->stallLimit());
   return {};
 }
 
@@ -221,7 +283,11 @@ int VgrdApp::run() {
     sd_notify(0, "STOPPING=1");
     s.io.stop();
   });
-  if (sd_watchdog_enabled(0, &s.watchdogUsec) > 0 && s.watchdogUsec > 0) s.kickWatchdog();
+  if (sd_watchdog_enabled(0, &s.watchdogUsec) <= 0) s.watchdogUsec = 0;
+  if (s.watchdogUsec > 0)
+    log::info("main", "systemd watchdog: {} ms; WATCHDOG=1 only while the {} watched threads make progress",
+              s.watchdogUsec / 1000, s.watchdog.size());
+  s.checkWatchdog();
   s.waitOperatorTrigger();
   s.checkReady();
   s.statsTimer.expires_after(std::chrono::seconds(60));

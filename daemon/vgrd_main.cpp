@@ -8,6 +8,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "core/cli.hpp"
+
 #include "config/cell_config.hpp"
 #include "core/log.hpp"
 #include "core/version.hpp"
@@ -16,6 +18,7 @@
 
 int main(int argc, char** argv) {
   CLI::App app{"vgrd: vision-guided robotics daemon"};
+  vgr::cli::showDefaults(app);
   app.set_version_flag("--version", std::string("vgrd ") + vgr::buildVersion());
   std::string configPath = "/etc/vgr/cell.yaml";
   std::string journalPath;
@@ -28,7 +31,7 @@ int main(int argc, char** argv) {
                "when it names something vgrd cannot use");
   app.add_option("--journal", journalPath, "override cell.journal (the per-cycle JSON-lines journal)");
   app.add_option("--log-level", logLevel, "override cell.log_level");
-  CLI11_PARSE(app, argc, argv);
+  if (const auto rc = vgr::cli::parse(app, argc, argv)) return *rc;
 
   if (check) {
     auto checked = vgr::daemon::checkCellConfig(configPath);

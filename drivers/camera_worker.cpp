@@ -21,7 +21,10 @@ CameraWorker::~CameraWorker() { stop(); }
 
 void CameraWorker::start() {
   stopping_ = false;
-  thread_ = std::thread([this] { run(); });
+  thread_ = std::thread([this] {
+    nameThisThread("vgr-camera");
+    run();
+  });
 }
 
 void CameraWorker::stop() {
@@ -174,6 +177,7 @@ void CameraWorker::run() {
   bool everConnected = false;
   bool reportedDown = false;
   for (;;) {
+    heartbeat_.beat();  // every turn: waits are at most 200 ms or the back-off (daemon/watchdog.hpp)
     {
       std::lock_guard lock(mutex_);
       if (stopping_) break;
@@ -195,8 +199,13 @@ void CameraWorker::run() {
       } else {
         if (!reportedDown) log::warn("camera", "{}: cannot connect; retrying with back-off up to {} ms", describe_, cfg_.reconnectMaxMs);
         reportedDown = true;
+        // The back-off in slices, a beat at each (reconnect_max_ms may exceed the stall limit).
+        const auto until = Clock::now() + milliseconds(backoffMs);
         std::unique_lock lock(mutex_);
-        cv_.wait_for(lock, milliseconds(backoffMs), [this] { return stopping_; });
+        while (!stopping_ && Clock::now() < until) {
+          cv_.wait_until(lock, std::min(until, Clock::now() + milliseconds(500)), [this] { return stopping_; });
+          heartbeat_.beat();
+        }
         backoffMs = std::min(backoffMs * 2, cfg_.reconnectMaxMs);
         // A trigger that arrived meanwhile was already refused by grab().
         continue;

@@ -15,6 +15,7 @@
 #include <thread>
 
 #include "config/cell_config.hpp"
+#include "core/heartbeat.hpp"
 #include "core/result.hpp"
 #include "drivers/camera.hpp"
 
@@ -51,6 +52,13 @@ class CameraWorker {
   bool waitStreaming(std::chrono::milliseconds timeout);
   CameraCounters counters() const;
   std::string describe() const { return describe_; }
+  // Beaten by the acquisition thread at every turn of its loop (at most 200 ms apart while
+  // idle, 500 ms during a back-off; a connect or a serve() in between blocks at most a few
+  // GVCP timeouts); read by vgrd's watchdog (daemon/watchdog.hpp).
+  const Heartbeat& heartbeat() const { return heartbeat_; }
+  // One GVCP command to a dead device blocks ~2.5 s (PITFALLS.md), a connect or a serve()
+  // a few of them: 20 s without a beat is a hung acquisition thread.
+  static constexpr std::chrono::milliseconds kStallLimit{20000};
 
  private:
   void run();
@@ -77,6 +85,7 @@ class CameraWorker {
   Frame frame_;            // filled by the acquisition thread, swapped out by grab()
   CameraCounters counters_;
   int consecutiveTimeouts_ = 0;     // acquisition thread
+  Heartbeat heartbeat_;
 };
 
 }  // namespace vgr::drivers

@@ -64,6 +64,7 @@ struct ModbusClientTrigger::Impl {
   modbus_t* ctx = nullptr;
   std::optional<std::array<std::uint16_t, kClientBlockWords>> written;  // last block the PLC has
   std::thread thread;
+  Heartbeat heartbeat;  // beaten by the client thread at every turn of its loop
 
   void run();
   bool connect();
@@ -130,6 +131,7 @@ void ModbusClientTrigger::Impl::disconnect(const char* what) {
 void ModbusClientTrigger::Impl::run() {
   auto nextBeat = Clock::now() + kHeartbeatPeriod;
   while (true) {
+    heartbeat.beat();
     if (ctx == nullptr && !connect()) {
       if (!waitUntil(Clock::now() + options.reconnect)) break;
       continue;
@@ -208,7 +210,10 @@ Result<void> ModbusClientTrigger::start() {
     std::lock_guard lock(s.mutex);
     s.quit = false;
   }
-  s.thread = std::thread([&s] { s.run(); });
+  s.thread = std::thread([&s] {
+    nameThisThread("vgr-modbus-cli");
+    s.run();
+  });
   log::info("modbus", "client mode: polling {} {} on {}:{} every {} ms (debounce {} ms), status block at HR {}",
             s.options.input == ModbusClientOptions::Input::Coil ? "coil" : "discrete input", s.options.inputAddress,
             s.options.host, s.options.port, s.options.poll.count(), s.options.debounce.count(), s.options.statusAddress);
@@ -254,6 +259,12 @@ ModbusClientTrigger::Counters ModbusClientTrigger::counters() const {
 }
 
 bool ModbusClientTrigger::connected() const { return impl_->isConnected.load(); }
+
+const Heartbeat& ModbusClientTrigger::heartbeat() const { return impl_->heartbeat; }
+
+std::chrono::milliseconds ModbusClientTrigger::stallLimit() const {
+  return impl_->options.reconnect + std::chrono::milliseconds(3000);
+}
 
 std::string ModbusClientTrigger::describe() const {
   return "Modbus client of " + impl_->options.host + ":" + std::to_string(impl_->options.port);

@@ -94,6 +94,10 @@ class ModbusClientTrigger final : public PlcLink {
   void setReady(bool ready) override;
   void publishResult(const ModbusResult& r) override;
   std::string describe() const override;
+  const Heartbeat& heartbeat() const override;
+  // One loop turn: a connect or a few requests, each bounded by the 500 ms response
+  // timeout, then the poll or reconnect wait: reconnect + 3 s.
+  std::chrono::milliseconds stallLimit() const override;
   Counters counters() const;
   bool connected() const;
 

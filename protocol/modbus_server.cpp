@@ -81,6 +81,7 @@ struct ModbusServer::Impl {
   std::vector<in_addr> allowed;  // options.allowedClients, parsed
   std::uint16_t boundPort = 0;
   std::thread thread;
+  Heartbeat heartbeat;  // beaten by the Modbus thread at every poll() turn
 
   Result<void> start();
   void stop();
@@ -136,7 +137,10 @@ Result<void> ModbusServer::Impl::start() {
     return fail(Status::Internal, "modbus: cannot create server context for " + where + ": " + errnoText(err));
   }
 
-  thread = std::thread([this] { run(); });
+  thread = std::thread([this] {
+    nameThisThread("vgr-modbus");
+    run();
+  });
   log::info("modbus", "listening on {}:{} (max {} clients, idle timeout {} ms, {} allowed, floats {})", options.bind,
             boundPort, options.maxClients, options.idleTimeout.count(),
             allowed.empty() ? std::string("any client") : std::to_string(allowed.size()) + " addresses",
@@ -290,6 +294,7 @@ void ModbusServer::Impl::run() {
   auto nextBeat = Clock::now() + kHeartbeatPeriod;
   std::vector<pollfd> fds;
   for (;;) {
+    heartbeat.beat();
     fds.clear();
     fds.push_back({wakePipe[0], POLLIN, 0});
     fds.push_back({listenFd, POLLIN, 0});
@@ -373,6 +378,8 @@ std::uint16_t ModbusServer::port() const { return impl_->boundPort != 0 ? impl_-
 std::string ModbusServer::describe() const {
   return "Modbus server " + impl_->options.bind + ":" + std::to_string(port());
 }
+
+const Heartbeat& ModbusServer::heartbeat() const { return impl_->heartbeat; }
 
 std::uint16_t ModbusServer::holdingRegister(std::uint16_t address) const {
   std::lock_guard lock(impl_->mutex);

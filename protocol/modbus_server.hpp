@@ -70,6 +70,9 @@ class ModbusServer final : public PlcLink {
   void setReady(bool ready) override;                  // any thread
   void publishResult(const ModbusResult& r) override;  // any thread; one lock, results before RESULT_ID before RESULT_VALID
   std::string describe() const override;
+  const Heartbeat& heartbeat() const override;
+  // poll() wakes at least once a second (the HEARTBEAT bit): 3 s.
+  std::chrono::milliseconds stallLimit() const override { return std::chrono::milliseconds(3000); }
 
   // The bound port once start() succeeded (the real one when options.port was 0), else
   // options.port.

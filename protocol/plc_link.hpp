@@ -9,10 +9,12 @@
 // must not block (contract of ModbusServer::TriggerHandler).
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <string>
 
+#include "core/heartbeat.hpp"
 #include "core/result.hpp"
 
 namespace vgr::protocol {
@@ -32,6 +34,11 @@ class PlcLink {
   virtual void publishResult(const ModbusResult& result) = 0;
   // "Modbus server 127.0.0.1:1502", "Modbus client of 10.0.0.5:502": for logs.
   virtual std::string describe() const = 0;
+  // The link's thread beats this at every turn of its loop; stallLimit() is the longest
+  // legitimate gap between two beats. vgrd's systemd watchdog stops pinging when a link's
+  // thread stays silent longer (daemon/watchdog.hpp). Any thread.
+  virtual const Heartbeat& heartbeat() const = 0;
+  virtual std::chrono::milliseconds stallLimit() const = 0;
 };
 
 }  // namespace vgr::protocol

@@ -6,7 +6,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/install-deps.sh
 ./scripts/reserve-ports.sh
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DVGR_WERROR=ON
+./scripts/configure.sh  # the same folder and flags as README command 1: nothing it built is built again
 cmake --build build -j"$(nproc)"
 ctest --test-dir build --output-on-failure --timeout 600
 

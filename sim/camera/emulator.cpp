@@ -64,6 +64,21 @@ struct CameraEmulator::Impl {
     }
     hasTruth = true;
     t = scenes.render(frameId, frame);
+    if (options.emptyEvery > 0 && frameId % static_cast<std::uint64_t>(options.emptyEvery) == 0) {
+      // The empty belt: the frame's background level (its median: the parts cover little of
+      // it) with the same kind of sensor noise, deterministic per frame id.
+      int hist[256] = {};
+      for (int r = 0; r < frame.rows; ++r)
+        for (const uchar* p = frame.ptr(r); p != frame.ptr(r) + frame.cols; ++p) ++hist[*p];
+      int level = 0;
+      for (std::size_t seen = 0; level < 255 && (seen += static_cast<std::size_t>(hist[level])) < frame.total() / 2; ++level) {
+      }
+      cv::RNG rng(frameId);
+      cv::Mat noise(frame.size(), CV_16SC1);
+      rng.fill(noise, cv::RNG::NORMAL, level, 2.0);
+      noise.convertTo(frame, CV_8U);
+      t.clear();
+    }
     if (depth != CV_16U) return frame;
     frame.convertTo(frame16, CV_16U, 257.0);  // 8-bit level v as v * 257: full scale 65535
     return frame16;

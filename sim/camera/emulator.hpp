@@ -33,6 +33,9 @@ struct EmulatorOptions {
   double fps = 25.0;                  // free-run frame rate (AcquisitionFrameRate default), (0, 1000]
   std::string depthDataset;           // if set: a depth camera serving this 3D data set
   std::string depthUnit = "Millimeter";  // Scan3dDistanceUnit served: Millimeter, Inch (scale / 25.4) or Pixel
+  // > 0: every N-th frame (frame id divisible by N) shows the empty belt (no part, empty
+  // truth): a cell where every N-th cycle finds nothing (the archive's tests and bench).
+  int emptyEvery = 0;
 };
 
 class CameraEmulator {

@@ -13,6 +13,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "core/cli.hpp"
+
 #include "config/cell_config.hpp"
 #include "core/log.hpp"
 #include "sim/camera/emulator.hpp"
@@ -26,11 +28,13 @@ void onPulse(int) { gPulses = gPulses + 1; }
 
 int main(int argc, char** argv) {
   CLI::App app{"vgr-sim-camera: GigE Vision camera emulator serving rendered scenes with ground truth"};
+  vgr::cli::showDefaults(app);
   std::string configPath, address, serial, truthPath, imagesFolder, scene;
   std::vector<std::string> cameraSpecs;
   long long seed = -1;
   int width = 0, height = 0;
   double loss = 0.0, fps = 25.0;
+  int emptyEvery = 0;
   app.add_option("--config", configPath, "cell config whose camera and sim sections to serve (default: the embedded sim-cell.yaml)");
   app.add_option("--address", address, "IPv4 address to serve on (default: the config's camera.address)");
   app.add_option("--serial", serial, "serial number (default: the config's sim.serial)");
@@ -48,8 +52,10 @@ int main(int argc, char** argv) {
                  "be a depth camera (Coord3D_C16, Scan3d features) serving this 3D data set (camera.yaml, images/, truth.csv)");
   app.add_option("--depth-unit", depthUnit, "the Scan3dDistanceUnit served (tests of a camera the driver refuses)")
       ->check(CLI::IsMember({"Millimeter", "Inch", "Pixel"}));
+  app.add_option("--empty-every", emptyEvery, "every N-th frame shows the empty belt (no part): a cell where every N-th cycle fails")
+      ->check(CLI::Range(0, 1000000));
   app.add_option("--truth", truthPath, "append one JSON line of ground truth per served frame to this file (first camera)");
-  CLI11_PARSE(app, argc, argv);
+  if (const auto rc = vgr::cli::parse(app, argc, argv)) return *rc;
 
   auto cfg = configPath.empty() ? vgr::config::parseCellConfig(vgr::config::embeddedSimCellYaml(), "<embedded sim-cell.yaml>")
                                 : vgr::config::loadCellConfig(configPath);
@@ -89,6 +95,7 @@ int main(int argc, char** argv) {
     o.imagesFolder = imagesFolder;
     o.depthDataset = depthDataset;
     o.depthUnit = depthUnit;
+    o.emptyEvery = emptyEvery;
     if (i == 0) o.truthPath = truthPath;
     auto cell = *cfg;
     cell.sim.seed = cfg->sim.seed + i;

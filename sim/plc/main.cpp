@@ -18,6 +18,8 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+
+#include "core/cli.hpp"
 #include <nlohmann/json.hpp>
 
 #include <cerrno>
@@ -390,20 +392,21 @@ int runServer(const Options& o) {
 int main(int argc, char** argv) {
   Options o;
   CLI::App app{"vgr-sim-plc: a PLC driving vgrd's Modbus TCP trigger/result handshake"};
-  app.add_option("--host", o.host, "Modbus server address")->capture_default_str();
-  app.add_option("--port", o.port, "Modbus server port")->capture_default_str()->check(CLI::Range(1, 65535));
-  app.add_option("--cycles", o.cycles, "number of trigger cycles")->capture_default_str()->check(CLI::NonNegativeNumber);
-  app.add_option("--job", o.job, "job id written to HR1")->capture_default_str()->check(CLI::Range(-32768, 32767));
-  app.add_option("--interval-ms", o.intervalMs, "pause between cycles, ms")->capture_default_str()->check(CLI::NonNegativeNumber);
-  app.add_option("--timeout-ms", o.timeoutMs, "timeout of each handshake step, ms")->capture_default_str()->check(CLI::PositiveNumber);
+  vgr::cli::showDefaults(app);
+  app.add_option("--host", o.host, "Modbus server address");
+  app.add_option("--port", o.port, "Modbus server port")->check(CLI::Range(1, 65535));
+  app.add_option("--cycles", o.cycles, "number of trigger cycles")->check(CLI::NonNegativeNumber);
+  app.add_option("--job", o.job, "job id written to HR1")->check(CLI::Range(-32768, 32767));
+  app.add_option("--interval-ms", o.intervalMs, "pause between cycles, ms")->check(CLI::NonNegativeNumber);
+  app.add_option("--timeout-ms", o.timeoutMs, "timeout of each handshake step, ms")->check(CLI::PositiveNumber);
   app.add_flag("--json", o.json, "one JSON object per cycle");
   app.add_flag("--serve", o.serve, "be the Modbus server of vgrd's client mode: pulse a sensor bit, read the block vgrd writes");
   app.add_option("--sensor-address", o.sensorAddress, "--serve: discrete input and coil of the sensor (0-based)")
-      ->capture_default_str()->check(CLI::Range(0, 65535));
+      ->check(CLI::Range(0, 65535));
   app.add_option("--status-address", o.statusAddress, "--serve: first of the 30 holding registers vgrd writes")
-      ->capture_default_str()->check(CLI::Range(0, 65506));
-  app.add_option("--pulse-ms", o.pulseMs, "--serve: sensor high time per cycle, ms")->capture_default_str()->check(CLI::Range(1, 60000));
-  CLI11_PARSE(app, argc, argv);
+      ->check(CLI::Range(0, 65506));
+  app.add_option("--pulse-ms", o.pulseMs, "--serve: sensor high time per cycle, ms")->check(CLI::Range(1, 60000));
+  if (const auto rc = vgr::cli::parse(app, argc, argv)) return *rc;
   if (o.serve) return runServer(o);
 
   PlcLink link(o.host, o.port, std::chrono::milliseconds(o.timeoutMs));

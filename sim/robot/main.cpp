@@ -46,6 +46,8 @@
 
 #include <fmt/core.h>
 #include <CLI/CLI.hpp>
+
+#include "core/cli.hpp"
 #include <boost/asio/connect.hpp>
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/ip/tcp.hpp>
@@ -496,31 +498,24 @@ class SimRobot {
 
 int main(int argc, char** argv) {
   CLI::App app{"vgr-sim-robot: a UR or ABB robot program polling vgrd for poses, validating every reply"};
+  vgr::cli::showDefaults(app);
   Options opt;
   app.add_option("--dialect", opt.dialect, "ur | abb | fanuc | binary")->required()->check(CLI::IsMember({"ur", "abb", "fanuc", "binary"}));
   app.add_option("--name", opt.name, "robot name printed in the output (default: the dialect)");
-  app.add_option("--host", opt.host, "vgrd address")->capture_default_str();
+  app.add_option("--host", opt.host, "vgrd address");
   app.add_option("--port", opt.port, "robot endpoint port")->required()->check(CLI::Range(1, 65535));
-  app.add_option("--job", opt.job, "job number sent in GET,<job>")->capture_default_str()->check(CLI::Range(1, 32767));
-  app.add_option("--count", opt.count, "replies to collect, 0 = until SIGTERM/SIGINT")->capture_default_str();
+  app.add_option("--job", opt.job, "job number sent in GET,<job>")->check(CLI::Range(1, 32767));
+  app.add_option("--count", opt.count, "replies to collect, 0 = until SIGTERM/SIGINT");
   app.add_option("--interval-ms", opt.intervalMs, "pause between a reply and the next request")
-      ->capture_default_str()
       ->check(CLI::Range(0, 3600000));
   app.add_option("--timeout-ms", opt.timeoutMs, "read timeout per reply")
-      ->capture_default_str()
       ->check(CLI::Range(1, 3600000));
   app.add_flag("--json", opt.json, "one JSON object per line");
   app.add_option("--abb-rotation", opt.abbRotation, "abb: the reply's rotation, zyx (rz, ry, rx) or quaternion (q1..q4)")
-      ->capture_default_str()
       ->check(CLI::IsMember({"zyx", "quaternion"}));
   app.add_option("--snapshot", opt.snapshot,
                  "eye-in-hand: send TRIG,<job>,<flange pose> instead of GET; the pose as x,y,z,qw,qx,qy,qz (mm, quaternion)");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    const int rc = app.exit(e);
-    return rc == 0 ? 0 : 2;
-  }
+  if (const auto rc = vgr::cli::parse(app, argc, argv)) return *rc;
   const std::optional<Dialect> dialect = vgr::protocol::parseDialect(opt.dialect);
   if (!dialect) return 2;  // unreachable: checked by CLI11
   if (opt.name.empty()) opt.name = opt.dialect;

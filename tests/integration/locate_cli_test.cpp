@@ -1,6 +1,7 @@
 // The localization tools as users run them: `vgr sim render` -> `vgr teach` -> `vgr locate
 // --json` and `vgr eval --json`, checked against the dataset's truth.csv; bad input gets a
-// clear error and exit code 2.
+// clear error and exit code 2. `vgr locate --overlay` and `vgr eval --overlays` draw the same
+// picture of an image (vision/overlay.hpp, the one vgrd's page shows).
 #include <unistd.h>
 
 #include <array>
@@ -11,6 +12,8 @@
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include "tests/support/command.hpp"
 
 namespace {
@@ -110,6 +113,48 @@ TEST_F(locate_cli, BadInputIsNamed) {
   r = vgr("locate --job " + (dir_ / "nojob").string() + " --image x.png --json");
   EXPECT_EQ(r.exitCode, 2);
   EXPECT_NE(r.out.find("nojob/job.yaml: cannot open the job file"), std::string::npos) << r.out;
+}
+
+TEST_F(locate_cli, LocateOverlayAndEvalOverlaysDrawTheSamePicture) {
+  const std::string data = (dir_ / "data").string(), job = (dir_ / "job").string(), overlays = (dir_ / "overlays").string();
+  auto r = vgr("sim render --out " + data + " --count 3 --seed 9 --part flat --parts 2 --noise 3 --width 640 --height 512 --focal 1000");
+  ASSERT_EQ(r.exitCode, 0) << r.out;
+  std::ifstream ty(dir_ / "data" / "template.yaml");
+  std::string line, grasp;
+  while (std::getline(ty, line))
+    if (line.rfind("# Teach a job on it:", 0) == 0) grasp = line.substr(line.find("--grasp ") + 8, line.find(" --regions") - line.find("--grasp ") - 8);
+  ASSERT_FALSE(grasp.empty());
+  r = vgr("teach --image " + data + "/template.png --grasp " + grasp + " --method hu --max-parts 4 --roi 20,20,600,470 --out " + job);
+  ASSERT_EQ(r.exitCode, 0) << r.out;
+  r = vgr("eval --job " + job + " --dataset " + data + " --overlays " + overlays + " --json");
+  ASSERT_EQ(r.exitCode, 0) << r.out;
+  int pictures = 0;
+  for (const auto& e : fs::directory_iterator(dir_ / "data")) {
+    const std::string name = e.path().filename().string();
+    if (e.path().extension() != ".png" || name == "template.png") continue;
+    const std::string mine = (dir_ / ("locate-" + name)).string();
+    r = vgr("locate --job " + job + " --image " + e.path().string() + " --json --overlay " + mine);
+    ASSERT_EQ(r.exitCode, 0) << r.out;
+    const auto j = nlohmann::json::parse(lastLine(r.out));
+    const cv::Mat a = cv::imread(mine, cv::IMREAD_UNCHANGED), b = cv::imread((fs::path(overlays) / name).string(), cv::IMREAD_UNCHANGED);
+    ASSERT_FALSE(a.empty()) << mine;
+    ASSERT_FALSE(b.empty()) << "vgr eval --overlays wrote no " << name;
+    ASSERT_EQ(a.type(), CV_8UC3);
+    ASSERT_EQ(a.size(), b.size());
+    EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0) << name << ": the two tools drew different pictures";
+    for (const auto& p : j["parts"]) {
+      const cv::Vec3b px = a.at<cv::Vec3b>(static_cast<int>(std::lround(p["y_px"].get<double>())),
+                                           static_cast<int>(std::lround(p["x_px"].get<double>())));
+      EXPECT_TRUE(px[0] > 200 && px[1] < 60 && px[2] > 200) << name << ": no grasp disc at the part, BGR " << px;
+    }
+    const cv::Vec3b roi = a.at<cv::Vec3b>(200, 20);  // the ROI's left edge, yellow
+    EXPECT_TRUE(roi[2] > 200 && roi[1] > 150 && roi[0] < 60) << "BGR " << roi;
+    ++pictures;
+  }
+  EXPECT_EQ(pictures, 3);
+  r = vgr("locate --job " + job + " --image " + data + "/template.png --overlay " + (dir_ / "no-extension").string());
+  EXPECT_EQ(r.exitCode, 2) << r.out;
+  EXPECT_NE(r.out.find("--overlay"), std::string::npos) << r.out;
 }
 
 }  // namespace

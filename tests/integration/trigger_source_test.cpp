@@ -42,7 +42,9 @@ TEST_F(trigger_source, journal_names_modbus_robot_and_operator) {
   modbus_close(ctx);
   modbus_free(ctx);
 
-  // The operator.
+  // The operator. The robot's cycle reaches the journal just after its reply (robots are
+  // answered first): wait for its line, or it would count as the operator's.
+  ASSERT_FALSE(journalEntry(robotCycle).is_null());
   const std::size_t before = journal().size();
   ASSERT_EQ(::kill(vgrd_->pid(), SIGUSR1), 0);
   nlohmann::json op;

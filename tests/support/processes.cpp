@@ -49,6 +49,17 @@ NotifySocket::~NotifySocket() {
   ::unlink(path_.c_str());
 }
 
+int NotifySocket::countFor(const std::string& what, std::chrono::milliseconds window) {
+  const auto end = std::chrono::steady_clock::now() + window;
+  int n = 0;
+  while (fd_ >= 0 && std::chrono::steady_clock::now() < end) {
+    char buf[512];
+    const ssize_t got = ::recv(fd_, buf, sizeof buf, 0);
+    if (got > 0 && std::string(buf, static_cast<std::size_t>(got)).find(what) != std::string::npos) ++n;
+  }
+  return n;
+}
+
 bool NotifySocket::waitFor(const std::string& what, std::chrono::milliseconds timeout) {
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   while (fd_ >= 0 && std::chrono::steady_clock::now() < deadline) {

@@ -36,6 +36,8 @@ class NotifySocket {
   const std::string& path() const { return path_; }
   // True when a datagram containing `what` arrives within `timeout`.
   bool waitFor(const std::string& what, std::chrono::milliseconds timeout);
+  // How many datagrams containing `what` arrive during `window` (reads for all of it).
+  int countFor(const std::string& what, std::chrono::milliseconds window);
 
  private:
   std::string path_;

@@ -227,11 +227,12 @@ std::string TestSocket::recvSome(std::chrono::milliseconds timeout) {
 }
 
 std::string httpRequest(std::uint16_t port, const std::string& method, const std::string& target,
-                        std::chrono::milliseconds timeout) {
+                        std::chrono::milliseconds timeout, const std::string& headers) {
   RawTcpClient::Options o;
   o.throwOnFailure = false;
   RawTcpClient c(port, o);
-  if (!c.connected() || !c.send(method + " " + target + " HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n"))
+  if (!c.connected() ||
+      !c.send(method + " " + target + " HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n" + headers + "\r\n"))
     return "";
   return c.readBytes(std::string::npos, timeout);  // up to the server's close
 }

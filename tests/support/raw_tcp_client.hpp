@@ -94,10 +94,11 @@ class TestSocket : public RawTcpClient {
   bool closedWithin(std::chrono::milliseconds timeout) { return waitClosed(timeout); }
 };
 
-// One HTTP/1.1 request to 127.0.0.1:port with "Connection: close": the whole response (head +
-// body) as the server sent it before closing, "" when nothing could be had within `timeout`.
+// One HTTP/1.1 request to 127.0.0.1:port with "Connection: close" (and `headers`, each line
+// "Name: value\r\n"): the whole response (head + body) as the server sent it before closing,
+// "" when nothing could be had within `timeout`.
 std::string httpRequest(std::uint16_t port, const std::string& method, const std::string& target,
-                        std::chrono::milliseconds timeout = std::chrono::milliseconds(5000));
+                        std::chrono::milliseconds timeout = std::chrono::milliseconds(5000), const std::string& headers = "");
 
 // True when nothing listens on 127.0.0.1:port.
 bool loopbackPortFree(std::uint16_t port);

@@ -63,7 +63,7 @@ class web_server : public ::testing::Test {
  protected:
   void SetUp() override {
     server_ = std::make_unique<WebServer>(io_, WebOptions{"127.0.0.1", 0});
-    server_->route("/hello", [](const HttpRequest& r) { return HttpReply{200, "text/plain", "hello " + r.query}; });
+    server_->route("/hello", [](const HttpRequest& r) { return HttpReply{200, "text/plain", "hello " + r.query, {}}; });
     ASSERT_TRUE(server_->start().has_value());
     ASSERT_GT(server_->port(), 0);
     thread_ = std::thread([this] { io_.run(); });

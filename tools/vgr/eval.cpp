@@ -37,6 +37,7 @@ CLI::App* EvalCommand::add(CLI::App& parent) {
   evalCmd->add_option("--match-tol", e.matchTolPx, "a feature match is correct within PX of its true place")->check(CLI::Range(0.0, 1e6));
   evalCmd->add_option("--limit", e.limit, "first N images only")->check(CLI::Range(0, 100000000));
   evalCmd->add_option("--plot", e.plotPath, "PNG of the sorted error curves (paper 000, Fig. 7)");
+  evalCmd->add_option("--overlays", e.overlaysDir, "write one overlay picture per image into DIR (as vgr locate --overlay)");
   evalCmd->add_flag("--json", options_.json, "only the final JSON line");
   return evalCmd;
 }

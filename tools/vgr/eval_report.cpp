@@ -21,6 +21,7 @@
 #include "vision/calib/plane_model.hpp"
 #include "vision/gray_image.hpp"
 #include "vision/locate/locator.hpp"
+#include "vision/overlay.hpp"
 
 namespace vgr::tools {
 namespace {
@@ -167,6 +168,15 @@ Result<EvalReport> evaluate(const EvalOptions& o) {
   const double pairTol = o.pairTolPx > 0 ? o.pairTolPx : o.posTolPx;
   const DatasetGeometry geo = readGeometry(o.datasetFolder);
 
+  vision::OverlayJob overlayJob;
+  if (!o.overlaysDir.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(o.overlaysDir, ec);
+    if (ec || !std::filesystem::is_directory(o.overlaysDir))
+      return fail(Status::BadArgument, o.overlaysDir + ": cannot create the overlays folder" + (ec ? ": " + ec.message() : ""));
+    overlayJob = daemon::overlayJobFor(*job);
+  }
+
   EvalReport rep;
   rep.method = method;
   int graspTp = 0, graspN = 0;
@@ -185,6 +195,18 @@ Result<EvalReport> evaluate(const EvalOptions& o) {
     rep.timeMs.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
     if (!out) return fail(out.error().code, fmt::format("{}: {}", path, out.error().message));
     const auto& dets = out->parts;
+    if (!o.overlaysDir.empty()) {
+      // The picture `vgr locate --overlay` draws of this image (one function: vision/overlay.hpp).
+      vision::OverlayFrame f;
+      f.job = overlayJob;
+      f.parts = vision::overlayParts(dets);
+      const Status st = dets.empty() ? Status::NoPartFound : Status::Ok;
+      f.caption = fmt::format("{}  {}  {} part{}", method, statusName(st), dets.size(), dets.size() == 1 ? "" : "s");
+      f.ok = st == Status::Ok;
+      const auto dst = std::filesystem::path(o.overlaysDir) / (std::filesystem::path(ti.image).stem().string() + ".png");
+      if (!cv::imwrite(dst.string(), vision::drawOverlay(img, f)))
+        return fail(Status::BadArgument, dst.string() + ": cannot write the overlay");
+    }
     ++rep.images;
     if (ti.parts.empty()) {
       ++rep.emptyImages;

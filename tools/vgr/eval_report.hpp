@@ -24,6 +24,7 @@ struct EvalOptions {
   double graspTpMm = 3, graspTpDeg = 2;  // paper 001's true positive: < 3 mm and < 2 deg
   int limit = 0;              // evaluate the first N images only; 0 = all
   std::string plotPath;       // sorted error curves (paper 000, Fig. 7); empty = none
+  std::string overlaysDir;    // one overlay picture per image (vision/overlay.hpp, as `vgr locate --overlay`); empty = none
 };
 
 struct EvalReport {

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include <CLI/CLI.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <fmt/core.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
@@ -23,6 +24,7 @@
 #include "vision/calib/pixel_mapping.hpp"
 #include "vision/gray_image.hpp"
 #include "vision/locate/locator.hpp"
+#include "vision/overlay.hpp"
 #include "vision/part_poses.hpp"
 
 namespace vgr::tools {
@@ -77,6 +79,7 @@ int runLocate(const LocateOptions& o) {
   const vision::calib::PixelMapping* mapWith = snapshot ? &*snapshot : mapping.get();
   auto locator = daemon::makeJobLocator(*job, method);
   if (!locator) return badInput(locator.error().message);
+  if (!o.overlay.empty() && !cv::haveImageWriter(o.overlay)) return badInput(o.overlay + ": --overlay needs a .png (or another image) file name");
   const auto t0 = std::chrono::steady_clock::now();
   auto out = (*locator)->locate(img);
   const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -89,7 +92,16 @@ int runLocate(const LocateOptions& o) {
     std::printf("%s\n", j.dump().c_str());
     return 1;
   }
-  j["status"] = out->parts.empty() ? static_cast<int>(Status::NoPartFound) : static_cast<int>(Status::Ok);
+  const Status status = out->parts.empty() ? Status::NoPartFound : Status::Ok;
+  if (!o.overlay.empty()) {
+    vision::OverlayFrame f;
+    f.job = daemon::overlayJobFor(*job);
+    f.parts = vision::overlayParts(out->parts);
+    f.caption = fmt::format("{}  {}  {} part{}", method, statusName(status), out->parts.size(), out->parts.size() == 1 ? "" : "s");
+    f.ok = status == Status::Ok;
+    if (!cv::imwrite(o.overlay, vision::drawOverlay(img, f))) return badInput(o.overlay + ": cannot write the overlay");
+  }
+  j["status"] = static_cast<int>(status);
   j["method"] = method;
   j["time_ms"] = ms;
   j["parts"] = nlohmann::json::array();
@@ -136,6 +148,7 @@ CLI::App* LocateCommand::add(CLI::App& parent) {
   locateCmd->add_option("--method", l.method, "override the job's method");
   locateCmd->add_flag("--json", l.json, "one JSON object: status, time_ms, parts");
   locateCmd->add_option("--flange", l.flange, "eye-in-hand calibration: the image's flange pose x,y,z,qw,qx,qy,qz (mm)");
+  locateCmd->add_option("--overlay", l.overlay, "write the image with the parts, grasp points and search ROI drawn on it (PNG)");
   return locateCmd;
 }
 

@@ -6,6 +6,7 @@
 //   vgr calibrate intrinsics|handeye|plane|synth ...   calibration (docs/calibration.md)
 //   vgr sim render | teach | locate | eval   localization datasets, jobs, runs (docs/localization.md)
 //   vgr classify train | eval   paper 002's part classifier (docs/classification.md)
+//   vgr replay --journal J --archive A --job DIR   a changed job on archived frames (docs/commissioning.md)
 #include <map>
 #include <memory>
 #include <string>
@@ -13,6 +14,8 @@
 #include <vector>
 
 #include <CLI/CLI.hpp>
+
+#include "core/cli.hpp"
 
 #include "core/version.hpp"
 
@@ -27,6 +30,7 @@
 #include "tools/vgr/eval.hpp"
 #include "tools/vgr/grab.hpp"
 #include "tools/vgr/locate.hpp"
+#include "tools/vgr/replay.hpp"
 #include "tools/vgr/sim_render.hpp"
 #include "tools/vgr/subcommand.hpp"
 #include "tools/vgr/teach.hpp"
@@ -56,6 +60,7 @@ struct Entry {
 int main(int argc, char** argv) {
   namespace tools = vgr::tools;
   CLI::App app{"vgr: vision-guided robotics tool"};
+  vgr::cli::showDefaults(app);
   app.set_version_flag("--version", std::string("vgr ") + vgr::buildVersion());
   app.require_subcommand(1);
 
@@ -73,6 +78,7 @@ int main(int argc, char** argv) {
       {nullptr, std::make_unique<tools::TeachCommand>()},
       {nullptr, std::make_unique<tools::LocateCommand>()},
       {nullptr, std::make_unique<tools::EvalCommand>()},
+      {nullptr, std::make_unique<tools::ReplayCommand>()},
       {"classify", std::make_unique<tools::ClassifyTrainCommand>()},
       {"classify", std::make_unique<tools::ClassifyEvalCommand>()},
   };
@@ -91,7 +97,7 @@ int main(int argc, char** argv) {
   std::vector<std::pair<CLI::App*, Subcommand*>> added;
   for (auto& e : table) added.emplace_back(e.command->add(e.group ? *groupApp(e.group) : app), e.command.get());
 
-  CLI11_PARSE(app, argc, argv);
+  if (const auto rc = vgr::cli::parse(app, argc, argv)) return *rc;
   for (const auto& [cli, command] : added)
     if (*cli) return command->run();
   return 0;
