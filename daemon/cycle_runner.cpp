@@ -203,15 +203,14 @@ CycleResult CycleRunner::runCycle(const Trigger& t, cv::Mat& shown) {
   r.grabMs = msSince(grabStart);
   if (!g) return end(Status::CameraError, g.error().message);
   r.frameId = frame_.frameId;
-  if (const auto size = mapping_->imageSize(); size && (frame_.width != size->width || frame_.height != size->height))
-    return end(Status::NotCalibrated, fmt::format("NOT_CALIBRATED: the calibration is for {}x{} px, the camera delivers {}x{} px",
-                                                  size->width, size->height, frame_.width, frame_.height));
-
   // A depth frame is no image for a 2D method (the camera was set to Coord3D_C16).
   if (frame_.depth())
     return end(Status::BadArgument, fmt::format("job {}: a 2D method cannot locate in the depth frames of this camera "
                                                 "(pixel format Coord3D_C16)",
                                                 t.jobId));
+  if (const auto size = mapping_->imageSize(); size && (frame_.width != size->width || frame_.height != size->height))
+    return end(Status::NotCalibrated, fmt::format("NOT_CALIBRATED: the calibration is for {}x{} px, the camera delivers {}x{} px",
+                                                  size->width, size->height, frame_.width, frame_.height));
 
   // 2. locate
   const auto locateStart = Clock::now();

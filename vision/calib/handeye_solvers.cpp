@@ -36,6 +36,17 @@ Iso fromCv(const cv::Mat& r, const cv::Mat& t) {
   return out;
 }
 
+// A_i' = C_i o A_i: the correction's rotation turns the flange about its own origin (base
+// axes) and its translation shifts it -- a robot's repeatability as a controller states it
+// (position and orientation error at the flange). Not exp(xi) * A_i, which would turn the
+// flange about the base origin and so also move it by the rotation times the robot's reach.
+Iso correctedPose(const Iso& c, const Iso& a) {
+  Iso out = Iso::Identity();
+  out.linear() = c.linear() * a.linear();
+  out.translation() = a.translation() + c.translation();
+  return out;
+}
+
 std::string joinNames(const std::vector<std::string>& v) {
   std::string s;
   for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
@@ -183,10 +194,10 @@ void refineJoint(const std::vector<Iso>& a, std::size_t residualsPerView, const 
   std::vector<Iso> c(n, Iso::Identity());
   auto viewRes = [&](const Iso& xx, const Iso& yy, const Iso& ci, std::size_t i) {
     Eigen::VectorXd r(rowsPerView);
-    viewResiduals(xx, yy, Iso(ci * a[i]), i, r.head(m));
-    const se3::Vec6 xi = se3::logSe3(ci);
-    r.segment<3>(m) = xi.head<3>() / sigmaMm;
-    r.segment<3>(m + 3) = xi.tail<3>() / sigmaRad;
+    viewResiduals(xx, yy, correctedPose(ci, a[i]), i, r.head(m));
+    const Eigen::AngleAxisd turn(ci.linear());
+    r.segment<3>(m) = ci.translation() / sigmaMm;
+    r.segment<3>(m + 3) = turn.axis() * turn.angle() / sigmaRad;
     return r;
   };
   auto allRes = [&](const Iso& xx, const Iso& yy, const std::vector<Iso>& cc) {
@@ -203,7 +214,7 @@ void refineJoint(const std::vector<Iso>& a, std::size_t residualsPerView, const 
     ~Report() {
       if (!out) return;
       out->clear();
-      for (std::size_t i = 0; i < a.size(); ++i) out->push_back(Iso(c[i] * a[i]));
+      for (std::size_t i = 0; i < a.size(); ++i) out->push_back(correctedPose(c[i], a[i]));
     }
   } report{a, c, corrected};
   Eigen::VectorXd r = allRes(x, y, c);

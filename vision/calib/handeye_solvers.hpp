@@ -55,11 +55,14 @@ struct ClosedForm {
 std::vector<ClosedForm> closedFormSolutions(HandEyeConfig config, const std::vector<Iso>& a, const std::vector<Iso>& b);
 
 // Joint maximum-likelihood refinement of X, Y and a small correction C_i per robot pose
-// (A_i' = C_i A_i, C_i = exp(xi_i), paper 003 eqs. 4-8 for the parametrisation).
+// (C_i = exp(xi_i), paper 003 eqs. 4-8 for the parametrisation, updated in se(3)): A_i' has
+// A_i's flange turned by C_i's rotation about the flange's own origin and shifted by C_i's
+// translation -- the robot's repeatability as position and orientation error at the flange.
 // viewResiduals(x, y, A_i', i, out) writes view i's `residualsPerView` measurement residuals,
-// already divided by their sigma; the prior xi_i / (sigmaMm, sigmaRad) is appended per view.
+// already divided by their sigma; the prior (translation / sigmaMm, rotation vector /
+// sigmaRad) of C_i is appended per view.
 // Hand-written LM (levmarq.hpp's damping) using the block structure: C_i only moves view i.
-// `corrected` (optional) receives the A_i' = C_i A_i of the solution.
+// `corrected` (optional) receives the corrected robot poses A_i' of the solution.
 using ViewResidualFn =
     std::function<void(const Iso& x, const Iso& y, const Iso& aCorrected, std::size_t view, Eigen::Ref<Eigen::VectorXd> out)>;
 void refineJoint(const std::vector<Iso>& a, std::size_t residualsPerView, const ViewResidualFn& viewResiduals, Iso& x,
