@@ -4,6 +4,7 @@
 #include <sys/socket.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -28,6 +29,43 @@ std::function<bool(const T&)> inRange(T lo, T hi) {
 std::function<bool(const std::string&)> oneOf(std::initializer_list<const char*> names) {
   std::vector<std::string> v(names.begin(), names.end());
   return [v](const std::string& s) { return std::find(v.begin(), v.end(), s) != v.end(); };
+}
+
+// `key: [min, max]`: two finite numbers with -bound <= min <= max <= bound.
+void readInterval(Section& s, const std::string& key, std::optional<Interval>& out, double bound) {
+  const YAML::Node n = s.get(key);
+  if (!n || n.IsNull()) return;
+  const std::string expect = fmt::format("expected [min, max] with {:g} <= min <= max <= {:g}", -bound, bound);
+  if (!n.IsSequence() || n.size() != 2) s.fail(n, key, expect + ", got '" + (n.IsScalar() ? n.Scalar() : "a list or map") + "'");
+  double v[2] = {0, 0};
+  for (std::size_t i = 0; i < 2; ++i) {
+    try {
+      v[i] = n[i].as<double>();
+    } catch (const YAML::Exception&) {
+      s.fail(n[i], key, expect + ", got '" + Section::scalar(n[i]) + "'");
+    }
+    if (!std::isfinite(v[i]) || v[i] < -bound || v[i] > bound) s.fail(n[i], key, expect + ", got '" + Section::scalar(n[i]) + "'");
+  }
+  if (v[0] > v[1]) s.fail(n, key, fmt::format("min {:g} is above max {:g}", v[0], v[1]));
+  out = Interval{v[0], v[1]};
+}
+
+void parsePoseLimits(Section s, PoseLimits& p) {
+  constexpr double kMm = 1e6, kDeg = 180;
+  readInterval(s, "x_mm", p.x, kMm);
+  readInterval(s, "y_mm", p.y, kMm);
+  readInterval(s, "z_mm", p.z, kMm);
+  readInterval(s, "rx_deg", p.rx, kDeg);
+  readInterval(s, "ry_deg", p.ry, kDeg);
+  readInterval(s, "rz_deg", p.rz, kDeg);
+  s.finish();
+}
+
+// jobs[].limits: {offset: {x_mm: [lo, hi], ...}, work_area: {...}} (core/pose_limits.hpp).
+void parseLimits(Section s, JobLimits& l) {
+  parsePoseLimits(Section(s.file(), s.get("offset"), s.join("offset")), l.offset);
+  parsePoseLimits(Section(s.file(), s.get("work_area"), s.join("work_area")), l.workArea);
+  s.finish();
 }
 
 void parseCamera(Section s, CameraConfig& c) {
@@ -166,6 +204,14 @@ bool validToken(const std::string& t) {
   return true;
 }
 
+// A user frame's name as robot programs spell them: "wobj0", "UFRAME[1]", "Conveyor 2".
+bool validFrameName(const std::string& t) {
+  if (t.empty() || t.size() > 32) return false;
+  for (char c : t)
+    if (c < 0x20 || c >= 0x7F) return false;
+  return true;
+}
+
 // The address in its canonical text (inet_ntop of inet_pton), "" when it is not one.
 std::string normalIpAddress(const std::string& text) {
   unsigned char buf[16];
@@ -233,16 +279,44 @@ void parseRobot(Section s, RobotConfig& r) {
   }
 
   std::string order = "best_score";
-  s.read<std::string>("part_order", order, oneOf({"best_score", "by_label", "label_only"}),
-                      "one of: best_score, by_label, label_only");
-  r.partOrder = order == "best_score" ? PartOrder::BestScore : order == "by_label" ? PartOrder::ByLabel : PartOrder::LabelOnly;
+  s.read<std::string>("part_order", order, oneOf({"best_score", "by_label", "label_only", "random"}),
+                      "one of: best_score, by_label, label_only, random");
+  r.partOrder = order == "best_score" ? PartOrder::BestScore
+                : order == "by_label" ? PartOrder::ByLabel
+                : order == "random"   ? PartOrder::Random
+                                      : PartOrder::LabelOnly;
   s.read<int>("label", r.label, inRange(0, 32767), "[0, 32767]");
   if (r.partOrder == PartOrder::LabelOnly && !s.get("label")) s.fail(s.node(), "label", "part_order label_only needs a label");
+  s.read<bool>("reply_label", r.replyLabel);
+  if (r.replyLabel && r.dialect == Dialect::Strict)
+    s.fail(s.get("reply_label"), "reply_label", "the strict dialect's pose frame has no room for a label (paper 002's six values)");
+
+  std::string deliver = "pose";
+  s.read<std::string>("deliver", deliver, oneOf({"pose", "offset"}), "one of: pose, offset");
+  r.delivery = *protocol::parseDelivery(deliver);  // oneOf() accepted exactly the names parseDelivery knows
+  const YAML::Node frame = s.get("frame");
+  if (frame && !frame.IsNull()) {
+    Section f(s.file(), frame, s.join("frame"));
+    f.require("name");
+    f.read<std::string>("name", r.frameName, validFrameName, "1 to 32 printable characters");
+    double x = 0, y = 0, z = 0, rz = 0, ry = 0, rx = 0;
+    for (auto [key, out] : {std::pair{"x_mm", &x}, std::pair{"y_mm", &y}, std::pair{"z_mm", &z}})
+      f.read<double>(key, *out, inRange(-1e6, 1e6), "[-1000000, 1000000]");
+    for (auto [key, out] : {std::pair{"rz_deg", &rz}, std::pair{"ry_deg", &ry}, std::pair{"rx_deg", &rx}})
+      f.read<double>(key, *out, inRange(-360.0, 360.0), "[-360, 360]");
+    f.finish();
+    r.baseFromUser = poseFromEulerZyxDeg(x, y, z, EulerZyxDeg{rz, ry, rx});
+  }
 
   std::string abbRotation = "zyx";
   s.read<std::string>("abb_rotation", abbRotation, oneOf({"zyx", "quaternion"}), "one of: zyx, quaternion");
   r.abbRotation = *protocol::parseAbbRotation(abbRotation);  // oneOf() accepted exactly these names
   if (s.get("abb_rotation") && r.dialect != Dialect::Abb) s.fail(s.get("abb_rotation"), "abb_rotation", "only for dialect abb");
+  // RAPID reads one reply of at most 80 characters: the quaternion reply takes up to 78 of them
+  // and the label two more fields (protocol/robot_codec.hpp formatReply).
+  if (r.replyLabel && r.abbRotation == AbbRotation::Quaternion)
+    s.fail(s.get("reply_label"), "reply_label",
+           "abb_rotation quaternion leaves no room for the label within RAPID's 80 characters; use abb_rotation zyx");
 
   const YAML::Node strict = s.get("strict");
   if (strict && !strict.IsNull()) {
@@ -261,6 +335,7 @@ void parseJobFolder(Section& s, JobConfig& j) {
   j.folder = folder.lexically_normal().string();
   for (const char* k : {"threshold", "min_area_px", "max_area_px", "part_height_mm", "reference"})
     if (s.get(k)) s.fail(s.get(k), k, std::string("set in the job folder's job.yaml, not here (the job has a 'folder')"));
+  parseLimits(Section(s.file(), s.get("limits"), s.join("limits")), j.limits);
   auto job = loadJob(j.folder);
   if (!job) s.fail(s.get("folder"), "folder", job.error().message);
   if (!fs::exists(job->templatePath())) s.fail(s.get("folder"), "folder", job->templatePath() + ": the template image is missing");
@@ -269,6 +344,7 @@ void parseJobFolder(Section& s, JobConfig& j) {
   s.read<double>("angle_offset_deg", j.angleOffsetDeg, inRange(-360.0, 360.0), "[-360, 360]");
   j.partHeightMm = job->partHeightMm;
   j.reference = {job->referenceXMm, job->referenceYMm, job->referenceZMm, job->referenceRzDeg};
+  j.referenceGiven = job->referenceGiven;
   s.finish();
 }
 
@@ -288,6 +364,8 @@ void parseJob(Section s, JobConfig& j) {
   if (j.maxAreaPx <= j.minAreaPx) s.fail(s.get("max_area_px"), "max_area_px", "must be above min_area_px");
   s.read<double>("part_height_mm", j.partHeightMm, inRange(0.0, 1000.0), "[0, 1000]");
   s.read<double>("angle_offset_deg", j.angleOffsetDeg, inRange(-360.0, 360.0), "[-360, 360]");
+  parseLimits(Section(s.file(), s.get("limits"), s.join("limits")), j.limits);
+  j.referenceGiven = s.has("reference");
   Section ref(s.file(), s.get("reference"), s.join("reference"));
   ref.read<double>("x_mm", j.reference.x);
   ref.read<double>("y_mm", j.reference.y);
@@ -306,6 +384,21 @@ void parseCalibration(Section s, CalibrationFilesConfig& c, const YAML::Node& no
     if (out.empty()) s.fail(s.get(key), key, "expected a file path");
     if (std::filesystem::path(out).is_relative() && !dir.empty()) out = (std::filesystem::path(dir) / out).string();
   };
+  if (s.has("check")) readPath("check", c.check);
+  const YAML::Node drift = s.get("drift");
+  if (drift && !drift.IsNull()) {
+    Section d(s.file(), drift, s.join("drift"));
+    c.drift.enabled = true;
+    d.read<double>("threshold_mm", c.drift.thresholdMm, [](const double& v) { return v > 0 && v <= 100; }, "(0, 100]");
+    d.read<int>("window", c.drift.window, inRange(1, 100), "[1, 100]");
+    std::string onAlarm = "warn";
+    d.read<std::string>("on_alarm", onAlarm, oneOf({"warn", "refuse"}), "one of: warn, refuse");
+    c.drift.refuse = onAlarm == "refuse";
+    d.finish();
+    if (c.check.empty())
+      s.fail(drift, "drift", "the drift monitor needs 'check': the file with the fiducial's stored position "
+                             "(vgr calibrate verify --store, docs/calibration.md)");
+  }
   if (node.IsMap() && node["multiheight"]) {
     // Paper 001's multi-height map alone: it needs no camera model.
     for (const char* key : {"intrinsics", "handeye", "plane"})
@@ -333,6 +426,30 @@ void parseSim(Section s, SimConfig& c) {
   s.read<double>("angle_range_deg", c.angleRangeDeg, inRange(0.0, 180.0), "[0, 180]");
   s.read<int>("parts", c.parts, inRange(1, 16), "[1, 16]");
   s.read<int>("clutter", c.clutter, inRange(0, 64), "[0, 64]");
+  s.read<bool>("still", c.still);
+  Section shift(s.file(), s.get("camera_shift"), s.join("camera_shift"));
+  shift.read<double>("x_mm", c.shiftXMm, inRange(-100.0, 100.0), "[-100, 100]");
+  shift.read<double>("y_mm", c.shiftYMm, inRange(-100.0, 100.0), "[-100, 100]");
+  shift.read<double>("z_mm", c.shiftZMm, inRange(-100.0, 100.0), "[-100, 100]");
+  shift.read<double>("rz_deg", c.shiftRzDeg, inRange(-10.0, 10.0), "[-10, 10]");
+  shift.finish();
+  const YAML::Node fiducial = s.get("fiducial");
+  if (fiducial && !fiducial.IsNull()) {
+    Section f(s.file(), fiducial, s.join("fiducial"));
+    for (const char* key : {"x_mm", "y_mm", "diameter_mm"}) f.require(key);
+    f.read<double>("x_mm", c.fiducialXMm, inRange(-1e6, 1e6), "[-1000000, 1000000]");
+    f.read<double>("y_mm", c.fiducialYMm, inRange(-1e6, 1e6), "[-1000000, 1000000]");
+    f.read<double>("diameter_mm", c.fiducialDiameterMm, inRange(2.0, 100.0), "[2, 100]");
+    f.finish();
+  }
+  if (const YAML::Node cls = s.get("classes"); cls && !cls.IsNull()) {
+    if (!cls.IsSequence()) s.fail(cls, "classes", "expected a list of part class names");
+    for (std::size_t i = 0; i < cls.size(); ++i) {
+      if (!cls[i].IsScalar() || cls[i].Scalar().empty()) s.fail(cls[i], "classes", "expected a part class name");
+      c.classes.push_back(cls[i].Scalar());
+    }
+    if (!c.classes.empty() && c.scene != "part") s.fail(cls, "classes", "needs scene: part");
+  }
   s.finish();
 }
 
@@ -466,6 +583,25 @@ CellConfig parse(const YAML::Node& root, const std::string& file) {
     const int job = c.robots[i].job;
     if (job != 0 && !ids.count(job))
       top.fail(robots[i]["job"], "robots[" + std::to_string(i) + "].job", "no job with id " + std::to_string(job) + " in jobs");
+  }
+  // Offsets are given from a job's taught reference: a job without one (the default 0 pose
+  // is no taught pose) cannot serve a robot in offset mode (any job: JOB,<n> switches), nor
+  // be limited in its offset.
+  for (std::size_t k = 0; k < c.jobs.size(); ++k) {
+    const JobConfig& j = c.jobs[k];
+    if (j.referenceGiven) continue;
+    const std::string path = "jobs[" + std::to_string(k) + "]";
+    const YAML::Node at = j.folder.empty() ? jobs[k] : jobs[k]["folder"];
+    const std::string where = j.folder.empty() ? "give `reference: {x_mm, y_mm, z_mm, rz_deg}` here"
+                                               : "give `reference:` in " + j.folder + "/job.yaml";
+    for (std::size_t i = 0; i < c.robots.size(); ++i)
+      if (c.robots[i].delivery == Delivery::Offset)
+        top.fail(at, path + (j.folder.empty() ? ".reference" : ".folder"),
+                 fmt::format("robots[{}] ('{}') delivers offsets from the job's taught reference, and job {} has none: {}", i,
+                             c.robots[i].name, j.id, where));
+    if (!j.limits.offset.empty())
+      top.fail(jobs[k]["limits"]["offset"], path + ".limits.offset",
+               fmt::format("offset limits are relative to the job's taught reference, and job {} has none: {}", j.id, where));
   }
 
   parseSim(Section(file, top.get("sim"), "sim"), c.sim);

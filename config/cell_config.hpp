@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "core/pose.hpp"
+#include "core/pose_limits.hpp"
 #include "core/result.hpp"
 #include "protocol/wire_types.hpp"
 
@@ -15,15 +17,19 @@ namespace vgr::config {
 
 // The protocol layer owns the wire choices (protocol/wire_types.hpp); the config names them.
 using protocol::AbbRotation;
+using protocol::Delivery;
 using protocol::Dialect;
 using protocol::WordOrder;
-using protocol::dialectName;  // the cell.yaml spelling: "ur", "abb", "fanuc", "binary", "strict"
+using protocol::deliveryName;  // the cell.yaml spelling: "pose", "offset"
+using protocol::dialectName;   // the cell.yaml spelling: "ur", "abb", "fanuc", "binary", "strict"
 
 // Which part of a multi-part image a robot gets next (paper 002's sorting strategies).
 enum class PartOrder {
   BestScore,  // "best_score": highest score first (the locator's order)
   ByLabel,    // "by_label": ascending label, best score first within a label
   LabelOnly,  // "label_only": only parts with RobotConfig::label, best score first
+  Random,     // "random": the parts of an image in a random order (paper 002's random selection;
+              // a permutation drawn from the cycle id, so a robot asking again gets the same)
 };
 
 enum class TriggerMode { Software, Hardware, FreeRun };
@@ -134,7 +140,22 @@ struct RobotConfig {
   PartOrder partOrder = PartOrder::BestScore;
   int label = 0;               // [0, 32767]: the one label served with part_order label_only
   AbbRotation abbRotation = AbbRotation::EulerZyx;  // dialect abb only: "zyx" or "quaternion"
+  // The part's label and its confidence in every reply (protocol/robot_codec.hpp formatReply
+  // withLabel): ur 10 values, abb +2 fields (<= 80 chars), fanuc 85 bytes, binary 48 bytes.
+  // Default false: replies exactly as before, for robot programs that read a fixed count.
+  // Not for strict (its pose frame is the six values the robot moves to).
+  bool replyLabel = false;
   StrictConfig strict;         // dialect strict only
+  // What the robot program expects (docs/protocols.md, "Offsets and frames";
+  // protocol/robot_frames.hpp): `deliver: pose` the part's pose in the user frame,
+  // `deliver: offset` the offset from the job's taught reference in the dialect's
+  // convention (abb, fanuc, binary: a displacement for PDispSet / Offset,PR[n]; ur, strict:
+  // R^-1 P for pose_trans). `frame`: the user / work-object frame the program moves in,
+  // its pose in the base frame (x, y, z mm; rz, ry, rx deg, Z-Y-X) and its name as the
+  // robot program calls it (journal). Absent: the base frame, named "base".
+  Delivery delivery = Delivery::Pose;
+  std::string frameName = "base";  // 1..32 printable ASCII characters
+  Pose baseFromUser;               // T_base_user
 };
 
 struct ReferencePose {
@@ -152,6 +173,10 @@ struct JobConfig {
   double partHeightMm = 0;     // mm, [0, 1000]: grasp height above the conveyor plane
   double angleOffsetDeg = 0;   // deg: template orientation relative to the locator's axis
   ReferencePose reference;     // taught reference the offsets are given from
+  bool referenceGiven = false; // `reference` written (in the cell entry or the folder's job.yaml)
+  // `limits` (cell entry, also for a job with a folder: the work area belongs to the cell):
+  // offset from the reference and absolute pose; a part outside is not delivered (-9).
+  JobLimits limits;
   // A job folder (`vgr teach`, docs/localization.md), resolved against the config file's
   // folder; empty = the moments method with the keys above. With a folder, the method
   // (unless `method` is given here), part_height_mm and reference come from its job.yaml,
@@ -172,6 +197,20 @@ struct SimConfig {
   double angleRangeDeg = 180;    // part/multi: rotation drawn in [-range, range], deg
   int parts = 1;                 // part/multi: parts per image, [1, 16]
   int clutter = 0;               // part/multi: distractor shapes per image, [0, 64]
+  // Commissioning (docs/commissioning.md): `still: true` shows frame 1's scene in every
+  // frame (the part does not move; the sensor noise still changes per frame), for
+  // `vgr repeatability`. `camera_shift` moves the rendered camera from where `model` (and
+  // the calibration) says it is: a knocked camera, for the drift monitor and
+  // `vgr calibrate verify`. `fiducial`: a bright disk fixed on the belt (base frame).
+  bool still = false;
+  double shiftXMm = 0, shiftYMm = 0, shiftZMm = 0, shiftRzDeg = 0;  // camera_shift: mm, deg
+  double fiducialXMm = 0, fiducialYMm = 0;  // fiducial: centre on the plane, base frame, mm
+  double fiducialDiameterMm = 0;            // mm, 0 = no fiducial, else [2, 100]
+  // part: several part classes mixed in every frame (sim/part_scene.hpp PartModel::byName
+  // names, e.g. [ring, square, rect_notch]); a part's truth then carries `label`, its 1-based
+  // index in this list (the label a classifier trained on these classes gives it). Empty =
+  // the scene's one part. Names are checked by the renderer (vgr-sim-camera, vgr demo).
+  std::vector<std::string> classes;
 };
 
 // Calibration files (docs/calibration.md) vgrd maps pixels with instead of `model`. Paths
@@ -184,6 +223,19 @@ struct CalibrationFilesConfig {
   std::string handeye;     // handeye.yaml, eye-to-hand (vgr calibrate handeye)
   std::string plane;       // plane.yaml (vgr calibrate plane)
   std::string multiHeight; // multiheight.yaml (paper 001, section 4.1); excludes the three above
+  // check.yaml (vgr calibrate verify --store, vision/calib/check_file.hpp): the stored
+  // positions of the check targets (a fixed fiducial, a check part, the plate put back).
+  std::string check;
+  // vgrd's drift monitor (daemon/drift_monitor.hpp), on when the `drift` section is given;
+  // needs `check` with a fiducial. The fiducial is measured in every frame; the alarm is up
+  // while the median of the last `window` residuals is above threshold_mm (or the fiducial
+  // was not seen in `window` frames in a row).
+  struct Drift {
+    bool enabled = false;
+    double thresholdMm = 0.3;  // mm, (0, 100]
+    int window = 5;            // frames, [1, 100]
+    bool refuse = false;       // on_alarm: warn (false) | refuse (true: every cycle -6 while the alarm is up)
+  } drift;
 };
 
 // vgrd's HTTP server (daemon/web_server.hpp): /metrics for Prometheus and the

@@ -27,6 +27,7 @@ std::string datasetYaml(const DatasetFile& d) {
   y << YAML::Key << "blur_sigma" << YAML::Value << fmt::format("{}", d.blurSigma);
   y << YAML::Key << "illum_ratio" << YAML::Value << fmt::format("{}", d.illumRatio);
   y << YAML::Key << "decoys" << YAML::Value << d.decoys;
+  if (d.plain) y << YAML::Key << "plain" << YAML::Value << true;
   if (!d.classes.empty()) y << YAML::Key << "classes" << YAML::Value << YAML::Flow << d.classes;
   y << YAML::Newline
     << YAML::Comment("Pinhole camera looking straight down; base frame origin on the plane under the optical centre.");
@@ -61,6 +62,7 @@ Result<DatasetFile> loadDatasetFile(const std::string& path) {
     d.blurSigma = top.number("blur_sigma", d.blurSigma, 0, 1000);
     d.illumRatio = top.number("illum_ratio", d.illumRatio, 0, 1e6);
     d.decoys = top.integer("decoys", d.decoys, 0, 1024);
+    top.read<bool>("plain", d.plain);
     if (const YAML::Node c = top.get("classes"); c && !c.IsNull()) {
       if (!c.IsSequence()) top.fail(c, "classes", "expected a list of class names");
       for (std::size_t i = 0; i < c.size(); ++i) {

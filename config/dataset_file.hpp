@@ -25,6 +25,7 @@ struct DatasetFile {
   int clutter = 0;
   double noiseSigma = 0, blurSigma = 0, illumRatio = 1;
   int decoys = 0;
+  bool plain = false;          // texture-less top faces (`--plain`); key written only when true
   double fx = 0, fy = 0, cx = 0, cy = 0;  // px
   double cameraHeightMm = 0;              // optical centre above the plane, mm
   // `vgr sim render --classes`: the part classes mixed in the images, in label order (truth.csv

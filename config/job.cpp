@@ -138,6 +138,7 @@ JobFile parse(const YAML::Node& root, const std::string& file, const std::string
   if (j.taught.angleMaxDeg < j.taught.angleMinDeg) top.fail(top.get("angle_max_deg"), "angle_max_deg", "must not be below angle_min_deg");
   j.partHeightMm = top.number("part_height_mm", 0, 0, 1000);
 
+  j.referenceGiven = top.has("reference");
   Section ref(file, top.get("reference"), "reference");
   j.referenceXMm = ref.number("x_mm", 0, -1e6, 1e6);
   j.referenceYMm = ref.number("y_mm", 0, -1e6, 1e6);

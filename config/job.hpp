@@ -27,6 +27,7 @@ struct JobFile {
   // Reference pose the offsets are given from (robot base frame) and where the part lay in
   // the template (px, deg): the taught pose.
   double referenceXMm = 0, referenceYMm = 0, referenceZMm = 0, referenceRzDeg = 0;
+  bool referenceGiven = false;  // job.yaml has a `reference` (robots delivering offsets need one)
   // Optional: a cell config (relative to folder) whose mapping (calibration files, a
   // multi-height map, else its `model`) maps pixels to the robot frame exactly as vgrd does;
   // empty = not calibrated (vgr locate then reports pixels only).

@@ -27,7 +27,8 @@ EulerZyxDeg toEulerZyxDeg(const Pose& p);
 // Rotation vector (axis * angle) in radians, as URScript's p[x, y, z, rx, ry, rz].
 Vec3 toRotationVector(const Pose& p);
 
-// The inverse conversions, for poses a robot sends (eye-in-hand snapshots, pose files):
+// The inverse conversions, for poses a robot sends (eye-in-hand snapshots, pose files) and
+// poses written in cell.yaml (user frames: poseFromEulerZyxDeg(x, y, z, {rz, ry, rx})):
 // (x, y, z) mm with a rotation given as Z-Y-X Euler degrees, a rotation vector (rad) or a
 // quaternion (w, x, y, z; normalised here, returned with qw >= 0). Callers check that the
 // inputs are finite and, for a quaternion, that its norm is near 1 (protocol/robot_codec).

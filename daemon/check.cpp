@@ -10,6 +10,7 @@
 
 #include "daemon/cell_mapping.hpp"
 #include "daemon/job_locator.hpp"
+#include "vision/calib/check_file.hpp"
 
 namespace vgr::daemon {
 namespace {
@@ -56,6 +57,18 @@ CheckResult checkCellConfig(const std::string& path) {
     if (auto loc = makeJobLocator(job); !loc) return problem(loc.error().message);
   // The calibration vgrd maps with: files present, consistent and within their residual limits.
   if (auto m = makeCellMapping(*cfg); !m) return problem("calibration: " + m.error().message);
+  // The check targets (vgr calibrate verify, the drift monitor): the file loads, names a job
+  // of the cell, and has the fiducial the drift monitor watches.
+  if (!cfg->calibration.check.empty()) {
+    auto check = vision::calib::readCheckFile(cfg->calibration.check);
+    if (!check) return problem("key 'calibration.check': " + check.error().message);
+    if (cfg->calibration.drift.enabled && !check->fiducial.present)
+      return problem(fmt::format("key 'calibration.drift': {} has no 'fiducial' for the drift monitor to watch",
+                                 cfg->calibration.check));
+    if (check->part.present && !cfg->findJob(check->part.job))
+      return problem(fmt::format("key 'calibration.check': {}: part.job {} is not a job of this cell", cfg->calibration.check,
+                                 check->part.job));
+  }
   if (const std::string why = journalProblem(cfg->journalPath); !why.empty())
     return problem(fmt::format("key 'cell.journal': journal {} {}", cfg->journalPath, why));
   for (std::size_t i = 0; i < cfg->robots.size(); ++i)

@@ -2,13 +2,17 @@
 
 #include <cmath>
 #include <numbers>
+#include <optional>
 
 #include <fmt/core.h>
 #include <opencv2/core.hpp>
 
 #include "core/log.hpp"
+#include "core/pose_limits.hpp"
 #include "daemon/cell_mapping.hpp"
+#include "daemon/drift_monitor.hpp"
 #include "daemon/job_locator.hpp"
+#include "vision/calib/check_file.hpp"
 #include "vision/gray_image.hpp"
 
 namespace vgr::daemon {
@@ -56,6 +60,20 @@ CycleRunner::CycleRunner(const config::CellConfig& cell, drivers::CameraWorker& 
     calibrationError_ = m.error().message;
     log::error("cycle", "NOT_CALIBRATED: {}", calibrationError_);
   }
+  if (mapping_ && cell.calibration.drift.enabled) {
+    // A drift monitor the config asks for but that cannot run leaves the calibration
+    // unchecked: every job answers NOT_CALIBRATED, as for a missing calibration file.
+    auto check = vision::calib::readCheckFile(cell.calibration.check);
+    if (check && !check->fiducial.present) check = fail(Status::NotCalibrated, cell.calibration.check + ": no 'fiducial' to monitor");
+    if (check) {
+      drift_ = std::make_unique<DriftMonitor>(cell.calibration.drift, check->fiducial);
+      log::info("cycle", "drift monitor: {}", drift_->describe());
+    } else {
+      calibrationError_ = "drift monitor: " + check.error().message;
+      mapping_.reset();
+      log::error("cycle", "NOT_CALIBRATED: {}", calibrationError_);
+    }
+  }
 }
 
 CycleRunner::~CycleRunner() { stop(); }
@@ -68,6 +86,7 @@ Result<void> CycleRunner::prepareJobs() {
     prepared.rules.angleOffsetDeg = job.angleOffsetDeg;
     prepared.rules.reference =
         poseFromXyzRz(job.reference.x, job.reference.y, job.reference.z, job.reference.rzDeg * kDegToRad);
+    prepared.limits = job.limits;
     auto loc = makeJobLocator(job);
     if (!loc) return std::unexpected(loc.error());
     prepared.locator = std::move(*loc);
@@ -182,6 +201,7 @@ CycleResult CycleRunner::runCycle(const Trigger& t, cv::Mat& shown) {
   auto end = [&](Status status, const std::string& why) {
     r.status = status;
     r.parts.clear();
+    r.rejected.clear();
     r.totalMs = msSince(t.at);
     log::warn("cycle", "cycle {}: {}", t.cycleId, why);
     return r;
@@ -224,18 +244,36 @@ CycleResult CycleRunner::runCycle(const Trigger& t, cv::Mat& shown) {
     image = gray8;
   }
   shown = image;
+  // Eye-in-hand: the camera was where the flange was for this image (checked above).
+  std::optional<vision::calib::SnapshotMapping> snapshot;
+  if (const auto* eyeInHand = mapping_->eyeInHand()) snapshot.emplace(*eyeInHand, *t.flange);
+  const vision::calib::PixelMapping& mapping = snapshot ? *snapshot : *mapping_;
+  if (drift_) {
+    drift_->measure(image, mapping, r);
+    if (r.driftAlarm && cell_.calibration.drift.refuse)
+      return end(Status::NotCalibrated, "NOT_CALIBRATED: calibration drift alarm (on_alarm: refuse): " + drift_->reason());
+  }
   auto found = job->second.locator->locate(image);
   r.locateMs = msSince(locateStart);
   if (!found) return end(found.error().code, found.error().message);
 
-  // 3. map (eye-in-hand: with the camera where the flange was for this image)
-  if (const auto* eyeInHand = mapping_->eyeInHand()) {
-    const vision::calib::SnapshotMapping snapshot(*eyeInHand, *t.flange);
-    r.parts = vision::partPoses(found->parts, snapshot, job->second.rules);
-  } else {
-    r.parts = vision::partPoses(found->parts, *mapping_, job->second.rules);
+  // 3. map (eye-in-hand: through the snapshot's mapping)
+  r.reference = job->second.rules.reference;
+  r.parts = vision::partPoses(found->parts, mapping, job->second.rules);
+  if (!job->second.limits.empty()) {
+    // Parts outside the job's limits are set apart (journal only), keeping the order.
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < r.parts.size(); ++i) {
+      std::string why = limitViolation(job->second.limits, r.parts[i].pose, r.parts[i].offset);
+      if (why.empty()) r.parts[kept++] = r.parts[i];
+      else r.rejected.push_back({r.parts[i], std::move(why)});
+    }
+    r.parts.resize(kept);
   }
-  r.status = r.parts.empty() ? Status::NoPartFound : Status::Ok;
+  r.status = !r.parts.empty() ? Status::Ok : r.rejected.empty() ? Status::NoPartFound : Status::OffsetOutOfLimits;
+  if (r.status == Status::OffsetOutOfLimits)
+    log::warn("cycle", "cycle {}: OFFSET_OUT_OF_LIMITS: {} part(s) found, none within job {}'s limits ({})", t.cycleId,
+              r.rejected.size(), t.jobId, r.rejected.front().why);
   r.totalMs = msSince(t.at);
   if (Clock::now() > deadline)
     return end(Status::ProcessingTimeout, fmt::format("finished after its {} ms deadline", cell_.cycleDeadlineMs));

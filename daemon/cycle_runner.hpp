@@ -1,8 +1,12 @@
 // Cycle orchestration. One cycle is four calls into four layers:
 //   grab    CameraWorker::grab()             drivers: the frame, within the deadline
 //   locate  vision::Locator::locate()        vision/locate: detections in pixels
-//   map     vision::partPoses()              vision/calib: poses in the robot base frame
+//   map     vision::partPoses()              vision/calib: poses in the robot base frame;
+//           parts outside the job's limits (core/pose_limits.hpp) are set apart
+//           (CycleResult::rejected, never delivered; -9 OFFSET_OUT_OF_LIMITS when none is left)
 //   deliver CycleSinks::onResult()           daemon: PLC links, robots, journal
+// With a drift monitor (cell.yaml calibration.drift) every grabbed frame also measures the
+// fixed fiducial (daemon/drift_monitor.hpp).
 // Every job is a Locator (a taught job's method from its folder; an untaught job the
 // blob-moments locator from its cell-config keys), built at start; the pixel -> robot
 // mapping is the one the cell config selects (daemon/cell_mapping.hpp).
@@ -33,6 +37,8 @@
 #include "vision/part_poses.hpp"
 
 namespace vgr::daemon {
+
+class DriftMonitor;
 
 struct CycleSinks {
   // Cycle thread, when a cycle starts (the result is pending). Must not block.
@@ -68,6 +74,8 @@ class CycleRunner {
   std::uint32_t submit(int jobId, TriggerSource source, const std::optional<Pose>& flange = std::nullopt);
 
   std::uint64_t overruns() const { return overruns_.load(); }
+  // The drift monitor (calibration.drift), null without one; its snapshot() is thread-safe.
+  const DriftMonitor* driftMonitor() const { return drift_.get(); }
 
   // The job a trigger with job 0 runs (Modbus JOB_ID 0, SIGUSR1, the page's trigger): the
   // cell's first job until the operator switches it (the page's "switch job"). Any thread.
@@ -107,6 +115,7 @@ class CycleRunner {
   // NOT_CALIBRATED with that message).
   std::unique_ptr<vision::calib::PixelMapping> mapping_;
   std::string calibrationError_;
+  std::unique_ptr<DriftMonitor> drift_;  // null without calibration.drift
   std::thread thread_;
   std::mutex mutex_;
   std::condition_variable cv_;
@@ -120,6 +129,7 @@ class CycleRunner {
   struct PreparedJob {
     std::unique_ptr<vision::Locator> locator;
     vision::PartPoseRules rules;
+    JobLimits limits;
   };
   std::map<int, PreparedJob> jobs_;  // by job id, every configured job (prepareJobs)
 };

@@ -43,6 +43,14 @@ std::uint32_t lastCycleIn(const std::string& tail) {
 
 }  // namespace
 
+std::vector<JournalRobot> journalRobots(const config::CellConfig& cell) {
+  std::vector<JournalRobot> out;
+  for (const auto& r : cell.robots)
+    if (r.delivery == config::Delivery::Offset || r.frameName != "base")
+      out.push_back({r.name, r.dialect, protocol::RobotFrame{r.delivery, r.baseFromUser}, r.frameName});
+  return out;
+}
+
 Journal::~Journal() {
   if (fd_ >= 0) ::close(fd_);
 }
@@ -90,7 +98,22 @@ namespace {
 double round3(double v) { return std::round(v * 1000.0) / 1000.0 + 0.0; }
 }  // namespace
 
-std::string Journal::toJson(const CycleResult& r) {
+namespace {
+
+nlohmann::json partJson(const PartResult& p) {
+  const auto e = toEulerZyxDeg(p.pose);
+  const auto o = toEulerZyxDeg(p.offset);
+  return {{"x_mm", round3(p.pose.x)},   {"y_mm", round3(p.pose.y)},     {"z_mm", round3(p.pose.z)},
+          {"rz_deg", round3(e.rz)},     {"ry_deg", round3(e.ry)},       {"rx_deg", round3(e.rx)},
+          {"dx_mm", round3(p.offset.x)}, {"dy_mm", round3(p.offset.y)}, {"dz_mm", round3(p.offset.z)},
+          {"drz_deg", round3(o.rz)},    {"dry_deg", round3(o.ry)},      {"drx_deg", round3(o.rx)},
+          {"u_px", round3(p.uPx)},      {"v_px", round3(p.vPx)},        {"angle_img_deg", round3(p.angleImgDeg)},
+          {"score", round3(p.score)},   {"label", p.label},             {"confidence", round3(p.confidence)}};
+}
+
+}  // namespace
+
+std::string Journal::toJson(const CycleResult& r, const std::vector<JournalRobot>& robots) {
   nlohmann::json j;
   j["cycle"] = r.cycleId;
   j["time"] = std::chrono::duration_cast<std::chrono::milliseconds>(r.triggerTime.time_since_epoch()).count() / 1000.0;
@@ -103,21 +126,42 @@ std::string Journal::toJson(const CycleResult& r) {
   j["locate_ms"] = round3(r.locateMs);
   j["total_ms"] = round3(r.totalMs);
   nlohmann::json parts = nlohmann::json::array();
-  for (const auto& p : r.parts) {
-    const auto e = toEulerZyxDeg(p.pose);
-    const auto o = toEulerZyxDeg(p.offset);
-    parts.push_back({{"x_mm", round3(p.pose.x)}, {"y_mm", round3(p.pose.y)}, {"z_mm", round3(p.pose.z)},
-                     {"rz_deg", round3(e.rz)}, {"ry_deg", round3(e.ry)}, {"rx_deg", round3(e.rx)},
-                     {"dx_mm", round3(p.offset.x)}, {"dy_mm", round3(p.offset.y)}, {"dz_mm", round3(p.offset.z)},
-                     {"drz_deg", round3(o.rz)}, {"dry_deg", round3(o.ry)}, {"drx_deg", round3(o.rx)},
-                     {"u_px", round3(p.uPx)}, {"v_px", round3(p.vPx)}, {"angle_img_deg", round3(p.angleImgDeg)},
-                     {"score", round3(p.score)}, {"label", p.label}});
-  }
+  for (const auto& p : r.parts) parts.push_back(partJson(p));
   j["parts"] = std::move(parts);
   if (r.flange) {  // eye-in-hand: where the robot said its flange was for this image
     const auto e = toEulerZyxDeg(*r.flange);
     j["flange"] = {{"x_mm", round3(r.flange->x)}, {"y_mm", round3(r.flange->y)}, {"z_mm", round3(r.flange->z)},
                    {"rz_deg", round3(e.rz)}, {"ry_deg", round3(e.ry)}, {"rx_deg", round3(e.rx)}};
+  }
+  if (!r.rejected.empty()) {
+    nlohmann::json rejected = nlohmann::json::array();
+    for (const auto& x : r.rejected) {
+      nlohmann::json p = partJson(x.part);
+      p["why"] = x.why;
+      rejected.push_back(std::move(p));
+    }
+    j["rejected"] = std::move(rejected);
+  }
+  if (!robots.empty() && !r.parts.empty()) {
+    // What each robot in offset mode or a user frame gets for each part (mm, Z-Y-X deg;
+    // its dialect converts units), in the order of `parts`.
+    nlohmann::json out = nlohmann::json::object();
+    for (const auto& robot : robots) {
+      nlohmann::json poses = nlohmann::json::array();
+      for (const auto& p : r.parts) {
+        const Pose d = protocol::deliveredPose(robot.dialect, robot.frame, r.reference, p.pose);
+        const auto e = toEulerZyxDeg(d);
+        poses.push_back({round3(d.x), round3(d.y), round3(d.z), round3(e.rz), round3(e.ry), round3(e.rx)});
+      }
+      out[robot.name] = {{"deliver", std::string(protocol::deliveryName(robot.frame.delivery))},
+                         {"frame", robot.frameName},
+                         {"poses", std::move(poses)}};
+    }
+    j["robots"] = std::move(out);
+  }
+  if (r.driftMonitored) {
+    j["drift_mm"] = std::isfinite(r.driftMm) ? nlohmann::json(round3(r.driftMm)) : nlohmann::json(nullptr);
+    j["drift_alarm"] = r.driftAlarm;
   }
   if (r.archived) j["archive"] = archiveStem(r.cycleId, r.triggerTime) + ".png";
   return j.dump();
@@ -125,7 +169,7 @@ std::string Journal::toJson(const CycleResult& r) {
 
 void Journal::append(const CycleResult& r) {
   if (fd_ < 0) return;
-  const std::string line = toJson(r) + "\n";
+  const std::string line = toJson(r, robots_) + "\n";
   const auto n = ::write(fd_, line.data(), line.size());
   if (n == std::ssize(line)) {
     lastCycleId_ = r.cycleId;

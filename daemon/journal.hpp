@@ -18,11 +18,25 @@
 #include <atomic>
 #include <cstdint>
 #include <string>
+#include <vector>
 
+#include "config/cell_config.hpp"
 #include "core/cycle.hpp"
 #include "core/result.hpp"
+#include "protocol/robot_frames.hpp"
 
 namespace vgr::daemon {
+
+// A robot endpoint whose replies differ from the journal's base-frame poses (offset mode or
+// a user frame): each OK line then says what it gets for every part ("robots", docs/journal.md).
+struct JournalRobot {
+  std::string name;
+  protocol::Dialect dialect = protocol::Dialect::Ur;
+  protocol::RobotFrame frame;
+  std::string frameName;
+};
+// The cell's robots in offset mode or with a user frame, in config order.
+std::vector<JournalRobot> journalRobots(const config::CellConfig& cell);
 
 class Journal {
  public:
@@ -34,9 +48,12 @@ class Journal {
   // Creates the parent folder if needed, repairs a torn last line (see above); error
   // names the path.
   Result<void> open(const std::string& path);
+  // Before the cycle thread starts: the robots each line reports on (journalRobots()).
+  void setRobots(std::vector<JournalRobot> robots) { robots_ = std::move(robots); }
   void append(const CycleResult& r);
-  // "trigger" is the cycle's TriggerSource ("modbus", "robot", "operator").
-  static std::string toJson(const CycleResult& r);
+  // "trigger" is the cycle's TriggerSource ("modbus", "robot", "operator"); `robots` adds
+  // what each of them receives for every part.
+  static std::string toJson(const CycleResult& r, const std::vector<JournalRobot>& robots = {});
 
   // The `cycle` of the last complete line found by open() (0: none), then of the last
   // record appended.
@@ -47,6 +64,7 @@ class Journal {
  private:
   int fd_ = -1;
   std::string path_;
+  std::vector<JournalRobot> robots_;
   std::atomic<std::uint32_t> lastCycleId_{0};
   std::atomic<std::uint64_t> writeErrors_{0};
   std::uint64_t burst_ = 0;  // failures since the last successful write (cycle thread)

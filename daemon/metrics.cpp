@@ -1,6 +1,9 @@
 #include "daemon/metrics.hpp"
 
 #include <array>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
 #include <map>
 #include <sstream>
 
@@ -49,6 +52,9 @@ struct Metrics::Impl {
   prometheus::Counter* triggers[3] = {};
   prometheus::Counter* overruns[3] = {};
   std::map<std::string, std::array<prometheus::Counter*, kStatusCount>> robotReplies;
+  prometheus::Gauge* driftMm = nullptr;  // enableDrift()
+  prometheus::Gauge* driftAlarm = nullptr;
+  prometheus::Counter* fiducialMissed = nullptr;
   std::vector<MetricSampler> samplers;
 
   void makeJob(prometheus::Family<prometheus::Counter>& cycles, prometheus::Family<prometheus::Histogram>& seconds,
@@ -123,6 +129,48 @@ void Metrics::cycleDone(const CycleResult& r) {
   impl_->grab->Observe(r.grabMs / 1000.0);
   impl_->locate->Observe(r.locateMs / 1000.0);
   if (!r.parts.empty()) impl_->parts->Increment(static_cast<double>(r.parts.size()));
+  if (r.driftMonitored && impl_->driftMm) {
+    impl_->driftMm->Set(r.driftMm);
+    impl_->driftAlarm->Set(r.driftAlarm ? 1 : 0);
+    if (!std::isfinite(r.driftMm)) impl_->fiducialMissed->Increment();
+  }
+}
+
+void Metrics::enableDrift() {
+  auto& reg = impl_->registry;
+  impl_->driftMm = &prometheus::BuildGauge()
+                        .Name("vgr_calibration_drift_mm")
+                        .Help("Drift monitor: the fixed fiducial's residual in the last frame (mapped minus stored "
+                              "position, mm); NaN when it was not seen")
+                        .Register(reg)
+                        .Add({});
+  impl_->driftMm->Set(std::nan(""));
+  impl_->driftAlarm = &prometheus::BuildGauge()
+                           .Name("vgr_calibration_drift_alarm")
+                           .Help("Drift monitor: 1 while the calibration drift alarm is up")
+                           .Register(reg)
+                           .Add({});
+  impl_->fiducialMissed = &prometheus::BuildCounter()
+                               .Name("vgr_calibration_fiducial_missed_total")
+                               .Help("Drift monitor: frames in which the fiducial was not seen")
+                               .Register(reg)
+                               .Add({});
+}
+
+void Metrics::watchCalibrationFiles(std::vector<std::pair<std::string, std::string>> files) {
+  if (files.empty()) return;
+  addSampler([files = std::move(files)](std::vector<SampledMetric>& out) {
+    namespace fs = std::filesystem;
+    for (const auto& [label, path] : files) {
+      std::error_code ec;
+      const auto written = fs::last_write_time(path, ec);
+      double age = -1;
+      if (!ec) age = std::chrono::duration<double>(fs::file_time_type::clock::now() - written).count();
+      out.push_back({"vgr_calibration_age_seconds",
+                     "Age of each calibration file the cell maps with (now minus its modification time, s; -1 unreadable)",
+                     SampledMetric::Type::Gauge, {{"file", label}, {"path", path}}, age});
+    }
+  });
 }
 
 void Metrics::triggered(TriggerSource source, bool accepted) {

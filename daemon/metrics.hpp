@@ -48,6 +48,15 @@ class Metrics {
   void robotReplied(const std::string& robot, Status status);
   // Before the first render().
   void addSampler(MetricSampler sampler);
+  // Before the cycle thread starts, for a cell with a drift monitor: the series
+  // vgr_calibration_drift_mm (the fiducial's last residual, NaN when not seen),
+  // vgr_calibration_drift_alarm (0/1) and vgr_calibration_fiducial_missed_total, which
+  // cycleDone() then keeps up to date.
+  void enableDrift();
+  // Before the first render(): vgr_calibration_age_seconds{file} (now minus each file's
+  // modification time, sampled at scrape; -1 when it cannot be read), `files` as
+  // (label, path): ("intrinsics", ".../intrinsics.yaml"), ...
+  void watchCalibrationFiles(std::vector<std::pair<std::string, std::string>> files);
 
   std::string render() const;
   static constexpr const char* kContentType = "text/plain; version=0.0.4; charset=utf-8";

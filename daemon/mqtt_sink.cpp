@@ -97,7 +97,7 @@ void MqttSink::stop() {
 }
 
 void MqttSink::publishResult(const CycleResult& r) {
-  std::string payload = Journal::toJson(r);
+  std::string payload = Journal::toJson(r, robots_);
   std::lock_guard<std::mutex> lock(mutex_);
   if (queue_.size() >= static_cast<std::size_t>(cfg_.queueCapacity)) {
     queue_.pop_front();

@@ -18,10 +18,12 @@
 #include <mutex>
 #include <set>
 #include <string>
+#include <vector>
 
 #include "config/cell_config.hpp"
 #include "core/cycle.hpp"
 #include "core/result.hpp"
+#include "daemon/journal.hpp"  // JournalRobot: the result message is the journal line
 
 struct mosquitto;
 struct mosquitto_message;
@@ -59,6 +61,9 @@ class MqttSink {
   void stop();
 
   void publishResult(const CycleResult& r);
+  // Before start(): the robots whose deliveries the result message lists, as the journal
+  // line does (daemon/journal.hpp journalRobots()).
+  void setRobots(std::vector<JournalRobot> robots) { robots_ = std::move(robots); }
   void setStatus(const MqttStatus& status);
   MqttCounters counters() const;
 
@@ -73,6 +78,7 @@ class MqttSink {
   void publishStatusLocked();
 
   const config::MqttConfig cfg_;
+  std::vector<JournalRobot> robots_;
   const std::string base_;     // <prefix>/<cell>
   const std::string version_;
   mosquitto* mosq_ = nullptr;

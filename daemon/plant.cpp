@@ -129,6 +129,7 @@ Result<void> Plant::start(PlantSources src) {
 
   if (cell_.mqtt.enabled) {
     mqtt_ = std::make_unique<MqttSink>(cell_.mqtt, cell_.name, buildVersion());
+    mqtt_->setRobots(journalRobots(cell_));
     lastJob_ = cell_.jobs.empty() ? 0 : cell_.jobs.front().id;
     pollStatus();  // the status is known before the first connect
     if (auto r = mqtt_->start(); !r) return r;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <random>
 
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/post.hpp>
@@ -28,9 +29,10 @@ ResultStore::~ResultStore() {
   for (auto& [id, w] : waiters_) w->timer.cancel();
 }
 
-void ResultStore::addRobot(const std::string& robot, RobotPolicy policy) {
+void ResultStore::addRobot(const std::string& robot, RobotPolicy policy, RobotDelivery delivery) {
   RobotState& s = robots_[robot];
   s.policy = policy;
+  s.delivery = delivery;
   s.currentJob = policy.job != 0 ? policy.job : (knownJobs_.empty() ? 0 : *knownJobs_.begin());
 }
 
@@ -49,7 +51,8 @@ int ResultStore::currentJob(const std::string& robot) const {
   return knownJobs_.empty() ? 0 : *knownJobs_.begin();
 }
 
-std::vector<protocol::RobotReply> ResultStore::replies(const CycleResult& r, const RobotPolicy& policy) {
+std::vector<protocol::RobotReply> ResultStore::replies(const CycleResult& r, const RobotPolicy& policy,
+                                                      const RobotDelivery& delivery) {
   std::vector<protocol::RobotReply> out;
   protocol::RobotReply base;
   base.cycleId = r.cycleId;
@@ -66,6 +69,12 @@ std::vector<protocol::RobotReply> ResultStore::replies(const CycleResult& r, con
   }
   if (policy.order == PartOrder::ByLabel)
     std::stable_sort(parts.begin(), parts.end(), [](const PartResult* a, const PartResult* b) { return a->label < b->label; });
+  if (policy.order == PartOrder::Random) {
+    // Paper 002's random selection: any of the parts first. Drawn from the cycle id, so that
+    // every call for one result (this function runs on each GET) gives the same order.
+    std::mt19937 rng(r.cycleId * 2654435761u + 12345u);
+    std::shuffle(parts.begin(), parts.end(), rng);
+  }
   if (parts.empty()) {
     base.status = Status::NoPartFound;
     out.push_back(base);
@@ -73,7 +82,9 @@ std::vector<protocol::RobotReply> ResultStore::replies(const CycleResult& r, con
   }
   for (const PartResult* p : parts) {
     protocol::RobotReply reply = base;
-    reply.pose = p->pose;
+    reply.pose = protocol::deliveredPose(delivery.dialect, delivery.frame, r.reference, p->pose);
+    reply.label = p->label;
+    reply.confidence = p->confidence;
     out.push_back(reply);
   }
   return out;
@@ -95,7 +106,7 @@ bool ResultStore::serveNext(const std::string& robot, int job, const Sender& sen
   RobotState& s = state(robot);
   Progress& p = s.progress[job];
   if (p.cycleId != it->second.cycleId) p = Progress{it->second.cycleId, 0, std::nullopt, {}};
-  const std::vector<protocol::RobotReply> all = replies(it->second, s.policy);
+  const std::vector<protocol::RobotReply> all = replies(it->second, s.policy, s.delivery);
   std::size_t index = 0;
   if (!p.returned.empty()) {
     index = *p.returned.begin();

@@ -13,7 +13,11 @@
 //    when one robot has more waiting connections than parts, the extra ones get its last
 //    part again.
 //  - A result without parts (or none with the robot's label) is delivered once as
-//    1 NO_PART_FOUND; an error result once with its status.
+//    1 NO_PART_FOUND; an error result once with its status (-9 OFFSET_OUT_OF_LIMITS when
+//    every part found was outside the job's limits: those parts are never served).
+//  - What a part's reply carries depends on the robot's policy (deliver / frame in
+//    cell.yaml, protocol/robot_frames.hpp): its pose in the user frame or its offset from
+//    the job's taught reference (CycleResult::reference).
 //  - GET,<job>,LAST: the reply this robot last got from the latest result again (the first
 //    part in its order if it got none yet); 3 at once when the job never produced a result
 //    and no cycle is running.
@@ -40,6 +44,7 @@
 
 #include "config/cell_config.hpp"
 #include "core/cycle.hpp"
+#include "protocol/robot_frames.hpp"
 #include "protocol/robot_server.hpp"
 
 namespace boost::asio {
@@ -57,6 +62,13 @@ struct RobotPolicy {
   int label = 0;              // LabelOnly: the label served
 };
 
+// What a reply carries for a part (protocol/robot_frames.hpp): the pose in the robot's
+// user frame, or the offset from the job's reference in the dialect's convention.
+struct RobotDelivery {
+  protocol::Dialect dialect = protocol::Dialect::Ur;
+  protocol::RobotFrame frame;  // default: poses in the base frame
+};
+
 class ResultStore {
  public:
   ResultStore(boost::asio::io_context& io, std::set<int> knownJobs);
@@ -65,7 +77,7 @@ class ResultStore {
   ResultStore& operator=(const ResultStore&) = delete;
 
   // Registers a robot (by endpoint name). A robot never registered gets the default policy.
-  void addRobot(const std::string& robot, RobotPolicy policy);
+  void addRobot(const std::string& robot, RobotPolicy policy, RobotDelivery delivery = {});
   // What TRIG calls (on the I/O thread; must not block): the new cycle id, 0 when refused.
   // `flange`: an eye-in-hand snapshot's T_base_flange (TRIG,<job>,<pose>), else empty.
   // Without one, TRIG is answered -1 UNKNOWN_COMMAND.
@@ -78,7 +90,8 @@ class ResultStore {
   void handle(const std::string& robot, const protocol::RobotRequest& req, protocol::ReplyFn reply);
 
   // The replies one result turns into for a policy, in serving order (at least one).
-  static std::vector<protocol::RobotReply> replies(const CycleResult& r, const RobotPolicy& policy);
+  static std::vector<protocol::RobotReply> replies(const CycleResult& r, const RobotPolicy& policy,
+                                                   const RobotDelivery& delivery = {});
   // The robot's current job (for tests and logs).
   int currentJob(const std::string& robot) const;
 
@@ -93,6 +106,7 @@ class ResultStore {
   using Sender = std::function<void(const protocol::RobotReply&, protocol::WrittenFn)>;
   struct RobotState {
     RobotPolicy policy;
+    RobotDelivery delivery;
     int currentJob = 0;
     std::map<int, Progress> progress;  // per job
   };

@@ -15,9 +15,12 @@
 #include <opencv2/core.hpp>
 
 #include "core/log.hpp"
+#include "daemon/commissioning_status.hpp"
 #include "daemon/cycle_runner.hpp"
+#include "daemon/drift_monitor.hpp"
 #include "daemon/image_archive.hpp"
 #include "daemon/journal.hpp"
+#include "daemon/metrics.hpp"
 #include "daemon/plc_links.hpp"
 #include "daemon/result_store.hpp"
 #include "daemon/watchdog.hpp"
@@ -181,6 +184,7 @@ VgrdApp::~VgrdApp() {
 Result<void> VgrdApp::start() {
   Impl& s = *impl_;
   if (auto r = s.journal.open(s.cfg.journalPath); !r) return r;
+  s.journal.setRobots(journalRobots(s.cfg));
 
   auto cam = drivers::makeCamera(s.cfg.camera);
   if (!cam) return std::unexpected(cam.error());
@@ -190,6 +194,17 @@ Result<void> VgrdApp::start() {
   for (const auto& j : s.cfg.jobs) jobs.insert(j.id);
   s.results = std::make_unique<ResultStore>(s.io, jobs);
   s.plant = std::make_unique<Plant>(s.io, s.cfg);
+  {
+    // Calibration age and drift in /metrics (docs/plant.md).
+    const auto& c = s.cfg.calibration;
+    std::vector<std::pair<std::string, std::string>> files;
+    for (const auto& [label, path] : {std::pair{"intrinsics", c.intrinsics}, std::pair{"handeye", c.handeye},
+                                      std::pair{"plane", c.plane}, std::pair{"multiheight", c.multiHeight},
+                                      std::pair{"check", c.check}})
+      if (!path.empty()) files.emplace_back(label, path);
+    s.plant->metrics().watchCalibrationFiles(std::move(files));
+    if (c.drift.enabled) s.plant->metrics().enableDrift();
+  }
   s.results->setTrigger([&s](int jobId, const std::optional<Pose>& flange) {
     return s.plant->triggered(TriggerSource::Robot, s.cycles->submit(jobId, TriggerSource::Robot, flange));
   });
@@ -209,6 +224,7 @@ Result<void> VgrdApp::start() {
     protocol::RobotEndpoint ep;
     ep.name = rc.name;
     ep.dialect = rc.dialect;
+    ep.replyLabel = rc.replyLabel;
     ep.bind = rc.bind;
     ep.port = rc.port;
     ep.maxClients = static_cast<std::size_t>(rc.maxClients);
@@ -228,7 +244,10 @@ Result<void> VgrdApp::start() {
     policy.replyDeadlineMs = rc.replyDeadlineMs;
     policy.order = rc.partOrder;
     policy.label = rc.label;
-    s.results->addRobot(rc.name, policy);
+    s.results->addRobot(rc.name, policy, RobotDelivery{rc.dialect, {rc.delivery, rc.baseFromUser}});
+    if (rc.delivery == config::Delivery::Offset || rc.frameName != "base")
+      log::info("main", "robot {}: {} dialect, {} in frame '{}'", rc.name, config::dialectName(rc.dialect),
+                rc.delivery == config::Delivery::Offset ? "offsets from the job's reference" : "poses", rc.frameName);
 
     auto server = std::make_unique<protocol::RobotServer>(
         s.io, ep, [&s](const std::string& robot, const protocol::RobotRequest& req, protocol::ReplyFn reply) {
@@ -264,6 +283,9 @@ Result<void> VgrdApp::start() {
   sources.setDefaultJob = [&s](int jobId) { return s.cycles->setDefaultJob(jobId); };
   sources.defaultJob = [&s] { return s.cycles->defaultJob(); };
   for (const auto& r : s.robots) sources.robots.push_back(r.get());
+  // The commissioning figures on the page (daemon/commissioning_status.hpp).
+  if (const DriftMonitor* drift = s.cycles->driftMonitor())
+    s.plant->addStatusSection("drift", [drift](nlohmann::json& out) { fillDriftSection(*drift, out); });
   if (auto r = s.plant->start(std::move(sources)); !r) return r;
 
   s.camera->start();

@@ -188,7 +188,7 @@ struct WebPage::Impl {
     std::vector<vision::OverlayPart> parts;
     for (const auto& p : j.value("parts", json::array()))
       parts.push_back({p.value("u_px", 0.0), p.value("v_px", 0.0), p.value("angle_img_deg", 0.0), p.value("score", 0.0),
-                       p.value("label", 0)});
+                       p.value("label", 0), p.value("confidence", 0.0)});
     const auto f = overlayOf(j.value("cycle", 0u), j.value("job", 0), static_cast<Status>(j.value("status", -8)), std::move(parts));
     return jpegReply(std::make_shared<const std::string>(encode(gray, f)), j.value("cycle", 0u), scaleFor(gray));
   }

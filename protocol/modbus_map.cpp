@@ -26,6 +26,7 @@ ModbusResult modbusResultFrom(const CycleResult& r) {
     m.r3 = e.rz + 0.0;
     m.score = p.score;
     m.label = p.label;
+    m.confidence = p.confidence;
   }
   return m;
 }
@@ -191,6 +192,7 @@ void ModbusMap::write(const ModbusResult& r) {
   set(kNumFound, toInt16Register(r.numFound));
   set(kCurrentJob, toInt16Register(r.jobId));
   set(kLabel, toInt16Register(r.label));
+  set(kConfidenceInt, toInt16Register(r.confidence, 1000.0));
   writeFloat(kX, r.x);
   writeFloat(kY, r.y);
   writeFloat(kZ, r.z);
@@ -198,6 +200,7 @@ void ModbusMap::write(const ModbusResult& r) {
   writeFloat(kR2, r.r2);
   writeFloat(kR3, r.r3);
   writeFloat(kScore, r.score);
+  writeFloat(kConfidence, r.confidence);
   set(kXInt, toInt16Register(r.x, 10.0));
   set(kYInt, toInt16Register(r.y, 10.0));
   set(kZInt, toInt16Register(r.z, 10.0));

@@ -67,11 +67,13 @@ struct ModbusResult {
   double x = 0, y = 0, z = 0, r1 = 0, r2 = 0, r3 = 0, score = 0;
   int jobId = 0;
   int label = 0;  // the best part's label (paper 002's classes), 0 = unclassified
+  double confidence = 0;  // [0, 1]: the classifier's confidence in that label; 0 without a classifier
 };
 
 // The registers' view of a cycle result (owned here, so every PLC link shows the same):
 // status, cycle, job and part count, and for an Ok result its best part (parts.front())
-// in mm and Z-Y-X Euler degrees (r1 = rx, r2 = ry, r3 = rz) with its score. -0.0 is
+// in mm and Z-Y-X Euler degrees (r1 = rx, r2 = ry, r3 = rz) with its score, label and the
+// label's confidence. -0.0 is
 // written as 0.0 (a PLC's HMI shows "-0" otherwise).
 ModbusResult modbusResultFrom(const CycleResult& result);
 
@@ -91,6 +93,7 @@ inline constexpr std::uint16_t kResultId = 19;    // low 16 bits of the cycle of
 inline constexpr std::uint16_t kNumFound = 20;    // int16
 inline constexpr std::uint16_t kCurrentJob = 21;  // int16
 inline constexpr std::uint16_t kLabel = 22;       // int16: the best part's label (0 = unclassified)
+inline constexpr std::uint16_t kConfidenceInt = 23;  // int16: the label's confidence x 1000 (0..1000)
 inline constexpr std::uint16_t kX = 24;           // float32, mm (24-25)
 inline constexpr std::uint16_t kY = 26;           // float32, mm
 inline constexpr std::uint16_t kZ = 28;           // float32, mm
@@ -98,6 +101,7 @@ inline constexpr std::uint16_t kR1 = 30;          // float32, degrees (rx)
 inline constexpr std::uint16_t kR2 = 32;          // float32, degrees (ry)
 inline constexpr std::uint16_t kR3 = 34;          // float32, degrees (rz)
 inline constexpr std::uint16_t kScore = 36;       // float32, 0..1
+inline constexpr std::uint16_t kConfidence = 38;  // float32, 0..1: the label's confidence (38-39)
 inline constexpr std::uint16_t kXInt = 40;        // int16, 0.1 mm
 inline constexpr std::uint16_t kYInt = 41;        // int16, 0.1 mm
 inline constexpr std::uint16_t kZInt = 42;        // int16, 0.1 mm

@@ -230,6 +230,13 @@ std::optional<AbbRotation> parseAbbRotation(std::string_view text) {
 std::string_view abbRotationName(AbbRotation rotation) {
   return rotation == AbbRotation::Quaternion ? "quaternion" : "zyx";
 }
+std::optional<Delivery> parseDelivery(std::string_view text) {
+  if (text == "pose") return Delivery::Pose;
+  if (text == "offset") return Delivery::Offset;
+  return std::nullopt;
+}
+
+std::string_view deliveryName(Delivery delivery) { return delivery == Delivery::Offset ? "offset" : "pose"; }
 
 // ---------------------------------------------------------------------------------------
 // RequestSplitter
@@ -598,10 +605,28 @@ std::optional<Result<RobotRequest>> RequestDecoder::next() {
 // ---------------------------------------------------------------------------------------
 // Replies
 
-std::string formatReply(Dialect dialect, const RobotReply& reply, AbbRotation abbRotation) {
+namespace {
+
+// The label fields of a withLabel reply (robot_codec.hpp), appended to a text reply.
+void appendLabelText(std::string& out, int label, double confidence) {
+  out.push_back(',');
+  appendInt(out, label);
+  out.push_back(',');
+  appendFixed(out, confidence, 3);
+}
+
+}  // namespace
+
+std::string formatReply(Dialect dialect, const RobotReply& reply, bool withLabel, AbbRotation abbRotation) {
   int status = statusCode(reply.status);
   bool zeroPose = reply.status != Status::Ok;
   if (!zeroPose && !representable(reply.pose)) {
+    status = statusCode(Status::Internal);
+    zeroPose = true;
+  }
+  // A label the wire cannot carry is never cut short: the reply becomes an error.
+  if (!zeroPose && withLabel &&
+      (reply.label < 0 || reply.label > kMaxReplyLabel || !(reply.confidence >= 0 && reply.confidence <= 1))) {
     status = statusCode(Status::Internal);
     zeroPose = true;
   }
@@ -617,21 +642,57 @@ std::string formatReply(Dialect dialect, const RobotReply& reply, AbbRotation ab
     }
   }
 
+  const int label = zeroPose ? 0 : reply.label;
+  const double confidence = zeroPose ? 0.0 : reply.confidence;
   switch (dialect) {
-    case Dialect::Ur:
     case Dialect::Strict:
       return formatUr(status, reply.cycleId, reply.pose, zeroPose);
-    case Dialect::Fanuc:
-      return formatFanuc(status, reply.cycleId, reply.pose, zeroPose);
-    case Dialect::Binary:
-      return formatBinary(status, reply.cycleId, reply.pose, zeroPose);
+    case Dialect::Ur: {
+      std::string out = formatUr(status, reply.cycleId, reply.pose, zeroPose);
+      if (withLabel) {
+        out.pop_back();  // ')'
+        appendLabelText(out, label, confidence);
+        out.push_back(')');
+      }
+      return out;
+    }
+    case Dialect::Fanuc: {
+      std::string out = formatFanuc(status, reply.cycleId, reply.pose, zeroPose);
+      if (withLabel) {
+        out.resize(out.size() - 2);  // CR LF
+        out.push_back(',');
+        appendIntPadded(out, label, 3, false);
+        out.push_back(',');
+        appendFixed(out, confidence, 3);
+        out.append("\r\n");
+      }
+      return out;
+    }
+    case Dialect::Binary: {
+      std::string out = formatBinary(status, reply.cycleId, reply.pose, zeroPose);
+      if (withLabel) {
+        binary::appendInt32(out, label);
+        binary::appendInt32(out, static_cast<std::int32_t>(std::lround(confidence * 1000.0)));
+        // The length field (bytes 4-7) says 48.
+        std::string len;
+        binary::appendInt32(len, static_cast<std::int32_t>(binary::kLabelReplyBytes));
+        out.replace(4, 4, len);
+      }
+      return out;
+    }
     case Dialect::Abb: {
       const auto format = abbRotation == AbbRotation::Quaternion ? &formatAbbQuaternion : &formatAbb;
       std::string out = format(status, reply.cycleId, reply.pose, zeroPose);
-      // Unreachable with the bounds above (worst case 77 characters, 78 with quaternions); kept so a
-      // future change of bounds can never send RAPID a truncated reply.
-      if (out.size() > kAbbMaxReplyChars)
+      if (withLabel) appendLabelText(out, label, confidence);
+      // Z-Y-X: unreachable for the daemon's cycle ids (< 2^23: Ok replies are at most 68
+      // characters, 78 with the label). Quaternion: at most 78 characters without the label,
+      // 88 with it, so a far pose with a label would not fit: config/ refuses abb_rotation
+      // quaternion together with reply_label, and this keeps any caller from sending RAPID a
+      // truncated reply.
+      if (out.size() > kAbbMaxReplyChars) {
         out = format(statusCode(Status::Internal), reply.cycleId, reply.pose, true);
+        if (withLabel) appendLabelText(out, 0, 0.0);
+      }
       return out;
     }
   }

@@ -121,6 +121,7 @@ inline constexpr std::uint32_t kReplyMagic = 0x56475241;    // "VGRA"
 inline constexpr std::size_t kRequestBytes = 16;
 inline constexpr std::size_t kPoseRequestBytes = 40;
 inline constexpr std::size_t kReplyBytes = 40;
+inline constexpr std::size_t kLabelReplyBytes = 48;  // withLabel: + label, + confidence x 1000
 inline constexpr std::int32_t kCmdGet = 1;      // job 0 = the robot's current job
 inline constexpr std::int32_t kCmdGetLast = 2;  // job 0 = the robot's current job
 inline constexpr std::int32_t kCmdJob = 3;      // job in [1, 32767]
@@ -156,7 +157,16 @@ struct RobotReply {
   Status status = Status::Ok;
   std::uint32_t cycleId = 0;  // kept below 2^23 by the daemon (RAPID num is a float32)
   Pose pose;                  // mm + unit quaternion, robot base/user frame; ignored unless Ok
+  int label = 0;              // the part's class (paper 002), 0 = none; sent only with withLabel
+  double confidence = 0;      // [0, 1]: the classifier's confidence in `label`
 };
+
+// Largest label a reply with the label fields can carry (3 digits: the ABB reply stays within
+// 80 characters, the fanuc columns are 3 wide). A larger label makes the reply Internal (-8).
+inline constexpr int kMaxReplyLabel = 999;
+// Replies with withLabel: the fanuc reply is kFanucLabelReplyChars, the binary one
+// binary::kLabelReplyBytes.
+inline constexpr std::size_t kFanucLabelReplyChars = 85;
 
 // Formats one reply, ready to send in ONE write:
 //  ur : "(<status>,<cycle>,<x>,<y>,<z>,<rx>,<ry>,<rz>)", x/y/z in metres and the rotation
@@ -180,7 +190,25 @@ struct RobotReply {
 // A reply whose status is not Ok carries a zero pose. A pose with a non-finite component
 // or |x|, |y|, |z| > kMaxAbsPositionMm becomes status Internal (-8) with a zero pose,
 // keeping the cycle id.
-std::string formatReply(Dialect dialect, const RobotReply& reply, AbbRotation abbRotation = AbbRotation::EulerZyx);
+//
+// withLabel (a robot's `reply_label: true`, docs/protocols.md): the part's label and its
+// confidence follow the pose, in every dialect that has room for them:
+//  ur : 10 values, "(...,<rz>,<label>,<confidence>)": socket_read_ascii_float(10) (<= 30)
+//  abb: "...,<rx>,<label>,<confidence>", still at most 80 characters (Ok replies <= 78)
+//  fanuc: ",LLL,C.CCC" in columns 74-83 (label 3 digits at 75-77, confidence at 79-83),
+//       then CR LF: kFanucLabelReplyChars (85) bytes
+//  binary: two more int32, label and confidence x 1000: binary::kLabelReplyBytes (48), length 48
+//  strict: no (its pose frame is paper 002's six values the robot moves to); ignored.
+// The confidence has 3 decimals (x 1000 in binary); a reply that is not Ok carries 0 and
+// 0.000. A label outside [0, kMaxReplyLabel] or a confidence outside [0, 1] makes an Ok
+// reply Internal (-8) with zeros.
+//
+// abbRotation (dialect abb only, cell.yaml robots[].abb_rotation): the rotation as Z-Y-X
+// Euler degrees rz, ry, rx (default) or the quaternion q1..q4 (w, x, y, z, 5 decimals, q1 >= 0).
+// A quaternion reply is at most 78 characters; with the label it can exceed 80, and then
+// becomes Internal (-8) with zeros (config/ refuses that combination).
+std::string formatReply(Dialect dialect, const RobotReply& reply, bool withLabel = false,
+                        AbbRotation abbRotation = AbbRotation::EulerZyx);
 
 // The strict dialect's pose frame (paper 002: "{x, y, z, Rx, Ry, Rz} encoded in a byte
 // frame"): "(<x>,<y>,<z>,<rx>,<ry>,<rz>)" in metres and a rotation vector in radians, 6

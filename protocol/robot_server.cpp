@@ -215,7 +215,7 @@ class RequestSession final : public Session {
 
   void deliverAwaited(const RobotReply& reply) override {
     awaitingReply_ = false;
-    writeBytes(formatReply(server_->endpoint.dialect, reply, server_->endpoint.abbRotation));
+    writeBytes(formatReply(server_->endpoint.dialect, reply, server_->endpoint.replyLabel, server_->endpoint.abbRotation));
     advance();
   }
 
@@ -249,7 +249,7 @@ class RequestSession final : public Session {
                  item.error().message);
       RobotReply r;
       r.status = item.error().code;
-      writeBytes(formatReply(server_->endpoint.dialect, r, server_->endpoint.abbRotation));
+      writeBytes(formatReply(server_->endpoint.dialect, r, server_->endpoint.replyLabel, server_->endpoint.abbRotation));
       return;
     }
     callHandler(*item);

@@ -27,6 +27,7 @@ namespace vgr::protocol {
 struct RobotEndpoint {
   std::string name;  // robot name from cell.yaml, used in logs and errors
   Dialect dialect = Dialect::Ur;
+  bool replyLabel = false;         // replies carry the part's label and confidence (formatReply withLabel)
   std::string bind = "127.0.0.1";  // IP address ("0.0.0.0" / "::" for all) or host name
   std::uint16_t port = 0;          // 0 = ephemeral (tests); see RobotServer::port()
   // Open connections at most. When full, a new connection from an address that already

@@ -1,4 +1,4 @@
-// The two wire choices a cell config makes for the protocol layer, owned here and used by
+// The wire choices a cell config makes for the protocol layer, owned here and used by
 // config/ (which parses them from cell.yaml) and by the codecs and servers: the robot
 // dialect of an endpoint and the word order of a Modbus float32. Plain enums, no I/O.
 #pragma once
@@ -30,6 +30,13 @@ enum class AbbRotation { EulerZyx, Quaternion };
 // "zyx" or "quaternion" (the cell.yaml spelling); nullopt otherwise.
 std::optional<AbbRotation> parseAbbRotation(std::string_view text);
 std::string_view abbRotationName(AbbRotation rotation);
+// What a robot endpoint receives for a part (docs/protocols.md, "Offsets and frames";
+// protocol/robot_frames.hpp does the arithmetic): the part's pose in the endpoint's user
+// frame, or the offset from the job's taught reference in the dialect's convention.
+enum class Delivery { Pose, Offset };
+// "pose" or "offset" (cell.yaml `robots[].deliver`); nullopt otherwise.
+std::optional<Delivery> parseDelivery(std::string_view text);
+std::string_view deliveryName(Delivery delivery);
 
 // Word order of a float32 spread over two registers. HighWordFirst = "ABCD": the register
 // at the lower address holds the sign/exponent half, each register big-endian on the wire.

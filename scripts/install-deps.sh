@@ -68,7 +68,10 @@ fi
 # (npm ci), unless that very version is installed already. Not with --cell.
 if [ -z "${1:-}" ]; then
   want=$(sed -n 's/.*"playwright-core": "\([0-9.]*\)".*/\1/p' tests/browser/package.json)
-  have=$(sed -n 's/.*"version": "\([0-9.]*\)".*/\1/p' tests/browser/node_modules/playwright-core/package.json 2>/dev/null | head -1)
+  have=""
+  if [ -f tests/browser/node_modules/playwright-core/package.json ]; then
+    have=$(sed -n 's/.*"version": "\([0-9.]*\)".*/\1/p' tests/browser/node_modules/playwright-core/package.json | head -1)
+  fi
   if [ "$want" != "$have" ]; then
     echo "install-deps: npm ci in tests/browser (playwright-core $want)"
     (cd tests/browser && npm ci --no-audit --no-fund)

@@ -13,7 +13,8 @@ namespace {
 constexpr double kDegToRad = M_PI / 180.0;
 }  // namespace
 
-CellScenes::CellScenes(const config::CellConfig& cell) : mode_(cell.sim.scene), planeZ_(cell.model.planeZ) {
+CellScenes::CellScenes(const config::CellConfig& cell)
+    : mode_(cell.sim.scene), planeZ_(cell.model.planeZ), still_(cell.sim.still), labelled_(!cell.sim.classes.empty()) {
   if (mode_ == "plate")
     plate_ = std::make_unique<SceneRenderer>(SceneRenderer::fromCellConfig(cell));
   else
@@ -27,13 +28,15 @@ namespace {
 
 CellPartTruth fromPlate(const SceneTruth& t) { return {t.xMm, t.yMm, t.zMm, t.rzDeg, t.uPx, t.vPx, t.angleImgDeg}; }
 
-CellPartTruth fromPlaced(const PartSceneRenderer& r, const PlacedPart& p, double planeZ) {
+CellPartTruth fromPlaced(const PartSceneRenderer& r, const PlacedPart& p, double planeZ, bool labelled) {
   const double c = std::cos(p.rzDeg * kDegToRad), s = std::sin(p.rzDeg * kDegToRad);
-  const PointMm g = r.part().grasp;
+  const PartModel& model = *r.classes().at(static_cast<std::size_t>(p.classIndex));  // its own class's grasp point
+  const PointMm g = model.grasp;
   CellPartTruth t;
+  t.label = labelled ? p.classIndex + 1 : 0;
   t.xMm = p.xMm + c * g.x - s * g.y;
   t.yMm = p.yMm + s * g.x + c * g.y;
-  t.zMm = planeZ + r.part().graspHeightMm;
+  t.zMm = planeZ + model.graspHeightMm;
   t.rzDeg = p.rzDeg;
   t.uPx = p.uPx;
   t.vPx = p.vPx;
@@ -50,16 +53,16 @@ CellPartTruth fromPlaced(const PartSceneRenderer& r, const PlacedPart& p, double
 std::vector<CellPartTruth> CellScenes::truth(std::uint64_t frameId) const {
   if (plate_) return {fromPlate(plate_->truthForFrame(frameId))};
   std::vector<CellPartTruth> out;
-  for (const auto& p : parts_->sample(frameId).parts) out.push_back(fromPlaced(*parts_, p, planeZ_));
+  for (const auto& p : parts_->sample(still_ ? 1 : frameId).parts) out.push_back(fromPlaced(*parts_, p, planeZ_, labelled_));
   return out;
 }
 
 std::vector<CellPartTruth> CellScenes::render(std::uint64_t frameId, cv::Mat& dst) const {
   if (plate_) return {fromPlate(plate_->render(frameId, dst))};
-  const PartScene scene = parts_->sample(frameId);
-  parts_->render(scene, dst);
+  const PartScene scene = parts_->sample(still_ ? 1 : frameId);
+  parts_->render(scene, dst, frameId);
   std::vector<CellPartTruth> out;
-  for (const auto& p : scene.parts) out.push_back(fromPlaced(*parts_, p, planeZ_));
+  for (const auto& p : scene.parts) out.push_back(fromPlaced(*parts_, p, planeZ_, labelled_));
   return out;
 }
 
@@ -71,7 +74,11 @@ std::string CellScenes::truthJson(std::uint64_t frameId, const std::vector<CellP
   std::string s = fmt::format(R"({{"frame_id":{})", frameId);
   if (!parts.empty()) s.append(",").append(fields(parts.front()));
   s.append(R"(,"parts":[)");
-  for (std::size_t i = 0; i < parts.size(); ++i) s.append(i ? ",{" : "{").append(fields(parts[i])).append("}");
+  for (std::size_t i = 0; i < parts.size(); ++i) {
+    s.append(i ? ",{" : "{").append(fields(parts[i]));
+    if (parts[i].label > 0) s.append(fmt::format(R"(,"label":{})", parts[i].label));
+    s.append("}");
+  }
   s.append("]}");
   return s;
 }

@@ -6,6 +6,10 @@
 // (PartSceneRenderer: holes, printed marks, machining grain; `multi` with 2-4 height
 // levels), so that every localization method, the feature ones included, can run in the
 // simulated cell. In every mode a frame is a pure function of (config, frame id).
+// Commissioning keys (docs/commissioning.md): `sim.still` keeps the parts of frame 1 in
+// every frame (only the noise changes), `sim.camera_shift` renders through a camera moved
+// from `model` (parts stay where the nominal camera placed them), `sim.fiducial` draws a
+// fixed bright disk on the belt.
 #pragma once
 
 #include <cstdint>
@@ -23,6 +27,7 @@ namespace vgr::sim {
 struct CellPartTruth {
   double xMm = 0, yMm = 0, zMm = 0, rzDeg = 0;
   double uPx = 0, vPx = 0, angleImgDeg = 0;
+  int label = 0;  // sim.classes: the part's 1-based class index there; 0 without classes
 };
 
 class CellScenes {
@@ -38,7 +43,8 @@ class CellScenes {
   // Frame `frameId` into dst (CV_8UC1, reallocated only if its size differs); returns truth(frameId).
   std::vector<CellPartTruth> render(std::uint64_t frameId, cv::Mat& dst) const;
   // One JSON object (no newline) of a frame's truth: {"frame_id", the first part's fields at
-  // the top level (x_mm, y_mm, z_mm, rz_deg, u_px, v_px, angle_img_deg), "parts": [...]}.
+  // the top level (x_mm, y_mm, z_mm, rz_deg, u_px, v_px, angle_img_deg), "parts": [...]};
+  // a part of a scene with sim.classes also has "label".
   static std::string truthJson(std::uint64_t frameId, const std::vector<CellPartTruth>& parts);
 
   // part/multi only (null for plate): the renderer, for teaching a job on its template.
@@ -49,6 +55,8 @@ class CellScenes {
   std::unique_ptr<SceneRenderer> plate_;
   std::unique_ptr<PartSceneRenderer> parts_;
   double planeZ_ = 0;
+  bool still_ = false;  // sim.still: every frame shows frame 1's parts
+  bool labelled_ = false;  // sim.classes given: truth carries labels
 };
 
 // The image angle (CCW as displayed) of the base frame's +x axis for the cell's camera: what

@@ -74,6 +74,7 @@ Result<DatasetSummary> writeDataset(const DatasetOptions& o) {
                                .blurSigma = s.blurSigma,
                                .illumRatio = s.illumRatio,
                                .decoys = s.decoys,
+                               .plain = s.plainFaces,
                                .fx = renderer.focalPx(),
                                .fy = renderer.focalPx(),
                                .cx = (s.width - 1) / 2.0,

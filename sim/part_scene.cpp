@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <stdexcept>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
@@ -188,9 +189,15 @@ PartSceneRenderer::PartSceneRenderer(PartModel part, PartSceneOptions options)
       focal_(options.focalPx > 0 ? options.focalPx : 1000.0 * options.width / 1280.0),
       camera_(focal_, focal_, options.cxPx >= 0 ? options.cxPx : (options.width - 1) / 2.0,
               options.cyPx >= 0 ? options.cyPx : (options.height - 1) / 2.0,
-              vision::PinholePlaneModel::downLookingCamera(options.cameraXMm, options.cameraYMm, options.cameraHeightMm,
-                                                          options.cameraRzDeg),
-              0.0) {
+              vision::PinholePlaneModel::downLookingCamera(options.cameraXMm + options.shiftXMm, options.cameraYMm + options.shiftYMm,
+                                                          options.cameraHeightMm + options.shiftZMm,
+                                                          options.cameraRzDeg + options.shiftRzDeg),
+              0.0),
+      placement_(focal_, focal_, options.cxPx >= 0 ? options.cxPx : (options.width - 1) / 2.0,
+                 options.cyPx >= 0 ? options.cyPx : (options.height - 1) / 2.0,
+                 vision::PinholePlaneModel::downLookingCamera(options.cameraXMm, options.cameraYMm, options.cameraHeightMm,
+                                                             options.cameraRzDeg),
+                 0.0) {
   sheets_ = makeSheets(part_);
 }
 
@@ -235,12 +242,13 @@ PartSceneRenderer::Sheets PartSceneRenderer::makeSheets(const PartModel& part) c
       for (int i = 0; i < n; ++i) {
         const double x = (i + 0.5) / sheet->scale - sheet->half, y = sheet->half - (j + 0.5) / sheet->scale;
         const double arc = std::sin(2 * M_PI * std::hypot(x + 160, y - 40) / 1.6);
-        row[i] = static_cast<float>(layer.gray + 3 * arc + sp[i]);
+        row[i] = options_.plainFaces ? static_cast<float>(layer.gray) : static_cast<float>(layer.gray + 3 * arc + sp[i]);
       }
     }
     tex.convertTo(sheet->tex, CV_8UC1);
     std::vector<std::vector<cv::Point>> marks, holes;
-    for (const auto& p : layer.marks) marks.push_back(toSheet(p, sheet->scale, sheet->half));
+    if (!options_.plainFaces)
+      for (const auto& p : layer.marks) marks.push_back(toSheet(p, sheet->scale, sheet->half));
     for (const auto& p : layer.holes) holes.push_back(toSheet(p, sheet->scale, sheet->half));
     if (!marks.empty()) cv::fillPoly(sheet->tex, marks, cv::Scalar(std::max(0, layer.gray - 110)), cv::LINE_AA, 4);
     if (!holes.empty()) cv::fillPoly(sheet->tex, holes, cv::Scalar(options_.background), cv::LINE_AA, 4);
@@ -269,6 +277,22 @@ PartSceneRenderer PartSceneRenderer::fromCellConfig(const config::CellConfig& c)
   o.clutter = c.sim.clutter;
   o.noiseSigma = c.sim.noiseSigma;
   o.seed = c.sim.seed;
+  o.shiftXMm = c.sim.shiftXMm;
+  o.shiftYMm = c.sim.shiftYMm;
+  o.shiftZMm = c.sim.shiftZMm;
+  o.shiftRzDeg = c.sim.shiftRzDeg;
+  o.fiducialXMm = c.sim.fiducialXMm;
+  o.fiducialYMm = c.sim.fiducialYMm;
+  o.fiducialDiameterMm = c.sim.fiducialDiameterMm;
+  if (!c.sim.classes.empty()) {
+    std::vector<PartModel> models;
+    for (const auto& name : c.sim.classes) {
+      auto model = PartModel::byName(name);
+      if (!model) throw std::invalid_argument("sim.classes: " + model.error().message);
+      models.push_back(std::move(*model));
+    }
+    return PartSceneRenderer(std::move(models), o);
+  }
   return PartSceneRenderer(c.sim.scene == "multi" ? PartModel::multi(c.sim.levels) : PartModel::flat(), o);
 }
 
@@ -358,10 +382,10 @@ PartScene PartSceneRenderer::sample(std::uint64_t index) const {
     for (int attempt = 0; attempt < 400; ++attempt) {
       const double u = unit(rng) * (options_.width - 1), v = unit(rng) * (options_.height - 1);
       const double rz = (2 * unit(rng) - 1) * range;
-      const auto onPlane = camera_.pixelToPlane({u, v}, 0.0);
+      const auto onPlane = placement_.pixelToPlane({u, v}, 0.0);
       if (!onPlane) continue;
       const PlacedPart p = place(onPlane->x, onPlane->y, rz, cls);
-      const cv::Rect2d box = footprint(camera_, model(cls), p);
+      const cv::Rect2d box = footprint(placement_, model(cls), p);
       if ((box & image) != box) continue;
       const cv::Rect2d grown(box.x - 6, box.y - 6, box.width + 12, box.height + 12);
       if (std::any_of(taken.begin(), taken.end(), [&](const cv::Rect2d& r) { return (r & grown).area() > 0; })) continue;
@@ -500,9 +524,21 @@ void PartSceneRenderer::drawDecoys(const PartScene& scene, cv::Mat& dst) const {
   }
 }
 
-void PartSceneRenderer::render(const PartScene& scene, cv::Mat& dst) const {
+void PartSceneRenderer::render(const PartScene& scene, cv::Mat& dst, std::uint64_t noiseIndex) const {
   dst.create(options_.height, options_.width, CV_8UC1);
   dst.setTo(cv::Scalar(options_.background));
+  if (options_.fiducialDiameterMm > 0) {
+    // A 96-gon on the plane, anti-aliased (1/16 px vertices); parts may lie on it.
+    std::vector<cv::Point> disk;
+    const double r = options_.fiducialDiameterMm / 2;
+    for (int k = 0; k < 96; ++k) {
+      const double a = 2 * M_PI * k / 96;
+      if (const auto px = camera_.project({options_.fiducialXMm + r * std::cos(a), options_.fiducialYMm + r * std::sin(a), 0.0}))
+        disk.emplace_back(cvRound(px->u * 16), cvRound(px->v * 16));
+    }
+    if (disk.size() >= 3)
+      cv::fillPoly(dst, std::vector<std::vector<cv::Point>>{disk}, cv::Scalar(options_.fiducialGray), cv::LINE_AA, 4);
+  }
   std::mt19937_64 rng(options_.seed * 0xD1B54A32D192ED03ull + scene.index * 0x94D049BB133111EBull + 5);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
 
@@ -556,7 +592,7 @@ void PartSceneRenderer::render(const PartScene& scene, cv::Mat& dst) const {
   if (options_.blurSigma > 0) cv::GaussianBlur(f, f, cv::Size(), options_.blurSigma);
   if (options_.noiseSigma > 0) {
     cv::Mat noise(f.size(), CV_32FC1);
-    cv::RNG nrng(options_.seed * 0x2545F4914F6CDD1Dull + scene.index * 0x9E3779B97F4A7C15ull + 3);
+    cv::RNG nrng(options_.seed * 0x2545F4914F6CDD1Dull + noiseIndex * 0x9E3779B97F4A7C15ull + 3);
     nrng.fill(noise, cv::RNG::NORMAL, 0, options_.noiseSigma);
     f += noise;
   }

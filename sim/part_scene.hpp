@@ -89,6 +89,18 @@ struct PartSceneOptions {
   // part's own top faces (same machining grain, same marks), 0.2-0.4 part radii across,
   // lying flat on the belt at random poses, never on a part. Not parts: not in the truth.
   int decoys = 0;
+  // Commissioning (cell.yaml sim.camera_shift / sim.fiducial): the camera as rendered sits
+  // shifted from the nominal one above (parts are still placed by the nominal camera, so
+  // a part lies where it would, and the shifted camera sees it elsewhere); a fiducial
+  // (diameter > 0) is a bright disk on the plane at a fixed base-frame position.
+  double shiftXMm = 0, shiftYMm = 0, shiftZMm = 0, shiftRzDeg = 0;
+  double fiducialXMm = 0, fiducialYMm = 0, fiducialDiameterMm = 0;
+  std::uint8_t fiducialGray = 230;
+  // Texture-less parts (`vgr sim render --plain`): every top face one uniform gray, without
+  // the machining grain and without printed or engraved marks; through holes, walls, image
+  // noise, blur, lighting and clutter stay. Plain machined parts: nothing for keypoint
+  // detectors but the outline's corners (issue 18, "methods that must not give up").
+  bool plainFaces = false;
 };
 
 // A part's pose on the conveyor and its truth in the image.
@@ -128,13 +140,17 @@ class PartSceneRenderer {
   // The textured scenes of a cell config's simulated camera (`sim.scene: part | multi`):
   // the config's `model` is the true camera (fx = fy assumed; heights and z are
   // then above plane_z_mm), `sim`
-  // the rest (size, noise, seed, levels, angle range, parts per image, clutter).
+  // the rest (size, noise, seed, levels, angle range, parts per image, clutter, classes).
+  // Throws std::invalid_argument for an unknown name in sim.classes.
   static PartSceneRenderer fromCellConfig(const config::CellConfig& cell);
 
   // Draws scene `index` (poses; deterministic in seed and index).
   PartScene sample(std::uint64_t index) const;
-  // Renders a scene into dst (CV_8UC1, width x height).
-  void render(const PartScene& scene, cv::Mat& dst) const;
+  // Renders a scene into dst (CV_8UC1, width x height); the sensor noise is drawn from
+  // `noiseIndex` (default: the scene's index; another index shows the same scene with
+  // other noise, sim.still).
+  void render(const PartScene& scene, cv::Mat& dst) const { render(scene, dst, scene.index); }
+  void render(const PartScene& scene, cv::Mat& dst, std::uint64_t noiseIndex) const;
   // Renders the template into dst (CV_8UC1, cropped).
   PartTemplate renderTemplate(cv::Mat& dst) const;
   // Truth of a part of class classIndex placed at (xMm, yMm, rzDeg).
@@ -162,7 +178,8 @@ class PartSceneRenderer {
   std::vector<std::pair<PartModel, Sheets>> extra_;  // classes 1..n-1
   PartSceneOptions options_;
   double focal_;
-  vision::PinholePlaneModel camera_;
+  vision::PinholePlaneModel camera_;     // the camera as rendered (shifted)
+  vision::PinholePlaneModel placement_;  // the nominal camera parts are placed by
   std::vector<std::shared_ptr<const Sheet>> sheets_;  // one per layer
 };
 

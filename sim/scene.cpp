@@ -35,22 +35,69 @@ std::vector<PointMm> makeOutline() {
   return p;
 }
 
+// Fills the polygon `img` (px) with `gray`, anti-aliased: drawn at kScale x resolution
+// around it, then area-averaged, blended over what dst holds.
+void fillPolygonAntiAliased(const std::vector<cv::Point2f>& img, std::uint8_t gray, cv::Mat& dst) {
+  if (img.size() < 3) return;
+  constexpr int kScale = 8;
+  constexpr int kShift = 4;  // fractional bits for fillPoly
+  cv::Rect box = cv::boundingRect(img);
+  box = (box + cv::Size(8, 8) - cv::Point(4, 4)) & cv::Rect(0, 0, dst.cols, dst.rows);
+  if (box.empty()) return;
+  cv::Mat hi(box.height * kScale, box.width * kScale, CV_8UC1, cv::Scalar(0));
+  std::vector<cv::Point> poly;
+  for (const auto& p : img) {
+    // Original pixel i covers [i - 0.5, i + 0.5]; high-res pixel k has its centre at
+    // (k + 0.5) / kScale - 0.5 in original pixels.
+    const double hx = ((double{p.x} - box.x) + 0.5) * kScale - 0.5;
+    const double hy = ((double{p.y} - box.y) + 0.5) * kScale - 0.5;
+    poly.emplace_back(cvRound(hx * (1 << kShift)), cvRound(hy * (1 << kShift)));
+  }
+  cv::fillPoly(hi, std::vector<std::vector<cv::Point>>{poly}, cv::Scalar(255), cv::LINE_8, kShift);
+  cv::Mat cover;
+  cv::resize(hi, cover, box.size(), 0, 0, cv::INTER_AREA);
+  cv::Mat roi = dst(box);
+  for (int y = 0; y < roi.rows; ++y) {
+    auto* r = roi.ptr<std::uint8_t>(y);
+    const auto* cv8 = cover.ptr<std::uint8_t>(y);
+    for (int x = 0; x < roi.cols; ++x) {
+      const double a = cv8[x] / 255.0;
+      r[x] = static_cast<std::uint8_t>(std::lround(r[x] * (1 - a) + gray * a));
+    }
+  }
+}
+
 }  // namespace
 
 SceneRenderer::SceneRenderer(const vision::PinholePlaneModel& model, SceneOptions options)
-    : model_(model), options_(options) {}
+    : model_(model), options_(options), placement_(model) {}
+
+SceneRenderer::SceneRenderer(const vision::PinholePlaneModel& model, SceneOptions options,
+                             const vision::PinholePlaneModel& placement)
+    : model_(model), options_(options), placement_(placement) {}
 
 SceneRenderer SceneRenderer::fromCellConfig(const config::CellConfig& c) {
   const auto& m = c.model;
+  // The rendered camera is where `model` says, moved by sim.camera_shift (a knocked camera
+  // the calibration does not know about).
   vision::PinholePlaneModel model(m.fx, m.fy, m.cx, m.cy,
-                                  vision::PinholePlaneModel::downLookingCamera(m.camX, m.camY, m.camZ, m.camRzDeg),
+                                  vision::PinholePlaneModel::downLookingCamera(m.camX + c.sim.shiftXMm, m.camY + c.sim.shiftYMm,
+                                                                               m.camZ + c.sim.shiftZMm,
+                                                                               m.camRzDeg + c.sim.shiftRzDeg),
                                   m.planeZ);
+  const vision::PinholePlaneModel nominal(m.fx, m.fy, m.cx, m.cy,
+                                          vision::PinholePlaneModel::downLookingCamera(m.camX, m.camY, m.camZ, m.camRzDeg),
+                                          m.planeZ);
   SceneOptions o;
+  o.stillFrame = c.sim.still ? 1 : 0;
+  o.fiducialXMm = c.sim.fiducialXMm;
+  o.fiducialYMm = c.sim.fiducialYMm;
+  o.fiducialDiameterMm = c.sim.fiducialDiameterMm;
   o.width = c.sim.width;
   o.height = c.sim.height;
   o.noiseSigma = c.sim.noiseSigma;
   o.seed = c.sim.seed;
-  return SceneRenderer(model, o);
+  return SceneRenderer(model, o, nominal);
 }
 
 const std::vector<PointMm>& SceneRenderer::partOutlineMm() {
@@ -60,12 +107,13 @@ const std::vector<PointMm>& SceneRenderer::partOutlineMm() {
 
 SceneTruth SceneRenderer::truthForFrame(std::uint64_t frameId) const {
   // splitmix-style seeding: neighbouring frame ids give unrelated poses.
-  std::mt19937_64 rng(options_.seed * 0x9E3779B97F4A7C15ull + frameId * 0xBF58476D1CE4E5B9ull + 1);
+  const std::uint64_t poseId = options_.stillFrame > 0 ? options_.stillFrame : frameId;
+  std::mt19937_64 rng(options_.seed * 0x9E3779B97F4A7C15ull + poseId * 0xBF58476D1CE4E5B9ull + 1);
   std::uniform_real_distribution<double> du(options_.marginPx, options_.width - 1 - options_.marginPx);
   std::uniform_real_distribution<double> dv(options_.marginPx, options_.height - 1 - options_.marginPx);
   std::uniform_real_distribution<double> da(-180.0, 180.0);
   const double u = du(rng), v = dv(rng), rz = normaliseDeg(da(rng));
-  const auto onPlane = model_.pixelToPlane({u, v}, 0.0);
+  const auto onPlane = placement_.pixelToPlane({u, v}, 0.0);
 
   SceneTruth t;
   t.frameId = frameId;
@@ -90,42 +138,25 @@ void SceneRenderer::renderTruth(const SceneTruth& t, std::uint64_t noiseSeed, cv
     for (int x = 0; x < dst.cols; ++x) row[x] = static_cast<std::uint8_t>(options_.background + (8 * x) / dst.cols);
   }
 
-  // Project the outline (exact for a polygon on a plane: lines stay lines).
+  // The fiducial first (the part may lie on it), then the part. Polygons on the plane
+  // project exactly (lines stay lines); the disk is a 96-gon.
+  if (options_.fiducialDiameterMm > 0) {
+    std::vector<cv::Point2f> disk;
+    const double r = options_.fiducialDiameterMm / 2;
+    for (int k = 0; k < 96; ++k) {
+      const double a = 2 * M_PI * k / 96;
+      const auto px = model_.project({options_.fiducialXMm + r * std::cos(a), options_.fiducialYMm + r * std::sin(a), model_.planeZ()});
+      if (px) disk.emplace_back(static_cast<float>(px->u), static_cast<float>(px->v));
+    }
+    fillPolygonAntiAliased(disk, options_.fiducialGray, dst);
+  }
   const double c = std::cos(t.rzDeg * kDegToRad), s = std::sin(t.rzDeg * kDegToRad);
   std::vector<cv::Point2f> img;
   for (const auto& p : partOutlineMm()) {
     const auto px = model_.project({t.xMm + c * p.x - s * p.y, t.yMm + s * p.x + c * p.y, t.zMm});
     if (px) img.emplace_back(static_cast<float>(px->u), static_cast<float>(px->v));
   }
-  if (img.size() < 3) return;
-
-  // Anti-aliased fill: draw at kScale x resolution around the part, then area-average.
-  constexpr int kScale = 8;
-  constexpr int kShift = 4;  // fractional bits for fillPoly
-  cv::Rect box = cv::boundingRect(img);
-  box = (box + cv::Size(8, 8) - cv::Point(4, 4)) & cv::Rect(0, 0, dst.cols, dst.rows);
-  if (box.empty()) return;
-  cv::Mat hi(box.height * kScale, box.width * kScale, CV_8UC1, cv::Scalar(0));
-  std::vector<cv::Point> poly;
-  for (const auto& p : img) {
-    // Original pixel i covers [i - 0.5, i + 0.5]; high-res pixel k has its centre at
-    // (k + 0.5) / kScale - 0.5 in original pixels.
-    const double hx = ((double{p.x} - box.x) + 0.5) * kScale - 0.5;
-    const double hy = ((double{p.y} - box.y) + 0.5) * kScale - 0.5;
-    poly.emplace_back(cvRound(hx * (1 << kShift)), cvRound(hy * (1 << kShift)));
-  }
-  cv::fillPoly(hi, std::vector<std::vector<cv::Point>>{poly}, cv::Scalar(255), cv::LINE_8, kShift);
-  cv::Mat cover;
-  cv::resize(hi, cover, box.size(), 0, 0, cv::INTER_AREA);
-  cv::Mat roi = dst(box);
-  for (int y = 0; y < roi.rows; ++y) {
-    auto* r = roi.ptr<std::uint8_t>(y);
-    const auto* cv8 = cover.ptr<std::uint8_t>(y);
-    for (int x = 0; x < roi.cols; ++x) {
-      const double a = cv8[x] / 255.0;
-      r[x] = static_cast<std::uint8_t>(std::lround(r[x] * (1 - a) + options_.foreground * a));
-    }
-  }
+  fillPolygonAntiAliased(img, options_.foreground, dst);
 
   if (options_.noiseSigma > 0) {
     cv::Mat noise(dst.size(), CV_16SC1);
@@ -139,7 +170,8 @@ void SceneRenderer::renderTruth(const SceneTruth& t, std::uint64_t noiseSeed, cv
 }
 
 SceneTruth SceneRenderer::render(std::uint64_t frameId, cv::Mat& dst) const {
-  const SceneTruth t = truthForFrame(frameId);
+  SceneTruth t = truthForFrame(frameId);
+  t.frameId = frameId;
   renderTruth(t, options_.seed ^ (frameId << 20), dst);
   return t;
 }

@@ -38,16 +38,27 @@ struct SceneOptions {
   int marginPx = 160;               // the grasp point stays this far from the image border
   std::uint8_t background = 30;     // conveyor gray level
   std::uint8_t foreground = 200;    // part gray level
+  // Commissioning (cell.yaml sim.still / sim.fiducial, docs/commissioning.md): with
+  // stillFrame > 0 every frame shows the part where frame `stillFrame` has it (the noise
+  // still changes with the frame id); a fiducial (diameter > 0) is a bright disk lying on
+  // the plane at a fixed base-frame position, drawn into every frame.
+  std::uint64_t stillFrame = 0;
+  double fiducialXMm = 0, fiducialYMm = 0, fiducialDiameterMm = 0;  // mm
+  std::uint8_t fiducialGray = 230;
 };
 
 class SceneRenderer {
  public:
   SceneRenderer(const vision::PinholePlaneModel& model, SceneOptions options);
+  // The camera that renders (`model`) differs from the nominal one the parts are placed by
+  // (`placement`): a camera moved after calibration (cell.yaml sim.camera_shift).
+  SceneRenderer(const vision::PinholePlaneModel& model, SceneOptions options, const vision::PinholePlaneModel& placement);
 
   // The simulated cell of a cell config: its `model` section is the true camera, `sim` the rest.
   static SceneRenderer fromCellConfig(const config::CellConfig& cell);
 
-  // Where the part is in frame `frameId` (deterministic in seed and frame id).
+  // Where the part is in frame `frameId` (deterministic in seed and frame id; with
+  // stillFrame set, where it is in that frame).
   SceneTruth truthForFrame(std::uint64_t frameId) const;
 
   // Renders frame `frameId` into `dst` (CV_8UC1, width x height; reallocated only if its
@@ -70,6 +81,7 @@ class SceneRenderer {
  private:
   vision::PinholePlaneModel model_;
   SceneOptions options_;
+  vision::PinholePlaneModel placement_;
 };
 
 }  // namespace vgr::sim

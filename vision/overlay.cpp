@@ -44,14 +44,14 @@ void text(cv::Mat& img, const std::string& s, cv::Point at, double fontScale, co
 std::vector<OverlayPart> overlayParts(const std::vector<Detection>& found) {
   std::vector<OverlayPart> out;
   out.reserve(found.size());
-  for (const auto& d : found) out.push_back({d.u, d.v, d.angleDeg, d.score, d.label});
+  for (const auto& d : found) out.push_back({d.u, d.v, d.angleDeg, d.score, d.label, d.confidence});
   return out;
 }
 
 std::vector<OverlayPart> overlayParts(const std::vector<PartResult>& parts) {
   std::vector<OverlayPart> out;
   out.reserve(parts.size());
-  for (const auto& p : parts) out.push_back({p.uPx, p.vPx, p.angleImgDeg, p.score, p.label});
+  for (const auto& p : parts) out.push_back({p.uPx, p.vPx, p.angleImgDeg, p.score, p.label, p.confidence});
   return out;
 }
 
@@ -113,7 +113,7 @@ cv::Mat drawOverlay(const cv::Mat& gray, const OverlayFrame& frame, double scale
     cv::circle(out, fixed(u, v), (kGraspRadiusPx + line) << kShift, kRimColour, cv::FILLED, cv::LINE_AA, kShift);
     cv::circle(out, fixed(u, v), kGraspRadiusPx << kShift, kGraspColour, cv::FILLED, cv::LINE_AA, kShift);
     std::string tag = fmt::format("#{} {:.2f}", rank, p.score);
-    if (p.label != 0) tag += fmt::format(" L{}", p.label);
+    if (p.label != 0) tag += fmt::format(" L{} {:.2f}", p.label, p.confidence);
     text(out, tag, cv::Point(static_cast<int>(u) + kGraspRadiusPx + 4, static_cast<int>(v) - kGraspRadiusPx - 4), font,
          kTextColour);
   }

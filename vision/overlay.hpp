@@ -11,7 +11,7 @@
 //     template's +x, counter-clockwise as displayed), and the grasp point: a filled magenta
 //     disc (BGR 255,0,255, radius kGraspRadiusPx in the output) with a white rim. Tests
 //     (the browser test) look for the magenta disc at (u, v) on the page's canvas;
-//   - a label by each part: "#<rank> <score>" and " L<label>" when the part has a class;
+//   - a label by each part: "#<rank> <score>" and " L<label> <confidence>" when the part has a class;
 //   - a caption banner on top: e.g. "cycle 17  job 1  OK  2 parts", green text for OK,
 //     red otherwise.
 // Conventions (docs/architecture.md "Units"): image px, x right, y down, pixel centres at
@@ -34,6 +34,7 @@ struct OverlayPart {
   double angleDeg = 0;   // part rotation, CCW as displayed
   double score = 0;      // [0, 1]
   int label = 0;         // 0 = no class (not drawn)
+  double confidence = 0; // [0, 1]: the classifier's confidence in `label` (drawn with it)
 };
 
 struct OverlayJob {

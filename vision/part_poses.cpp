@@ -26,6 +26,7 @@ std::vector<PartResult> partPoses(const std::vector<Detection>& found, const cal
     part.angleImgDeg = d.angleDeg;
     part.score = d.score;
     part.label = d.label;
+    part.confidence = d.confidence;
     parts.push_back(part);
   }
   return parts;

@@ -5,6 +5,10 @@
 // example cell (config/examples/sim-cell.yaml): address 127.0.0.1, serial VGR-SIM-0, seed 1.
 // Several cameras: --camera SERIAL@ADDRESS, repeated (one address each; camera i renders
 // with seed + i). SIGUSR1 = one edge on every camera's Line0 (simulated hardware trigger).
+// Commissioning (docs/commissioning.md): --still (the part does not move; the noise still
+// changes per frame) and --camera-shift X,Y[,Z[,RZ]] (mm, deg: the camera knocked away
+// from where its calibration says it is) override the config's sim.still / sim.camera_shift.
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <memory>
@@ -34,6 +38,8 @@ int main(int argc, char** argv) {
   long long seed = -1;
   int width = 0, height = 0;
   double loss = 0.0, fps = 25.0;
+  bool still = false;
+  std::string shift;
   int emptyEvery = 0;
   app.add_option("--config", configPath, "cell config whose camera and sim sections to serve (default: the embedded sim-cell.yaml)");
   app.add_option("--address", address, "IPv4 address to serve on (default: the config's camera.address)");
@@ -52,6 +58,8 @@ int main(int argc, char** argv) {
                  "be a depth camera (Coord3D_C16, Scan3d features) serving this 3D data set (camera.yaml, images/, truth.csv)");
   app.add_option("--depth-unit", depthUnit, "the Scan3dDistanceUnit served (tests of a camera the driver refuses)")
       ->check(CLI::IsMember({"Millimeter", "Inch", "Pixel"}));
+  app.add_flag("--still", still, "every frame shows frame 1's scene (only the noise changes): sim.still");
+  app.add_option("--camera-shift", shift, "X,Y[,Z[,RZ]]: render through a camera moved by this many mm (deg): sim.camera_shift");
   app.add_option("--empty-every", emptyEvery, "every N-th frame shows the empty belt (no part): a cell where every N-th cycle fails")
       ->check(CLI::Range(0, 1000000));
   app.add_option("--truth", truthPath, "append one JSON line of ground truth per served frame to this file (first camera)");
@@ -67,6 +75,22 @@ int main(int argc, char** argv) {
   if (width > 0) cfg->sim.width = width;
   if (height > 0) cfg->sim.height = height;
   if (!scene.empty()) cfg->sim.scene = scene;
+  if (still) cfg->sim.still = true;
+  if (!shift.empty()) {
+    double v[4] = {0, 0, 0, 0};
+    int n = 0;
+    char tail = 0;
+    n = std::sscanf(shift.c_str(), "%lf,%lf,%lf,%lf%c", &v[0], &v[1], &v[2], &v[3], &tail);
+    if (n < 2 || n > 4 || std::abs(v[0]) > 100 || std::abs(v[1]) > 100 || std::abs(v[2]) > 100 || std::abs(v[3]) > 10) {
+      std::fprintf(stderr, "vgr-sim-camera: --camera-shift '%s': expected X,Y[,Z[,RZ]] (mm within 100, deg within 10)\n",
+                   shift.c_str());
+      return 2;
+    }
+    cfg->sim.shiftXMm = v[0];
+    cfg->sim.shiftYMm = v[1];
+    cfg->sim.shiftZMm = v[2];
+    cfg->sim.shiftRzDeg = v[3];
+  }
 
   std::vector<vgr::sim::EmulatorOptions> cams;
   if (cameraSpecs.empty()) {

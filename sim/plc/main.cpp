@@ -87,6 +87,9 @@ void printCycle(int n, const ResultBlock& regs, double latencyMs, bool json) {
     j["r2"] = num(kR2);
     j["r3"] = num(kR3);
     j["score"] = num(kScore);
+    j["label"] = asInt16(reg(kLabel));
+    j["confidence"] = num(kConfidence);
+    j["confidence_int"] = asInt16(reg(kConfidenceInt));
     j["latency_ms"] = latencyMs;
     std::cout << j.dump() << std::endl;
   } else {

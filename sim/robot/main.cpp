@@ -11,6 +11,11 @@
 //           the 75-byte fixed-column reply that SUB_STR/CNV_STR_REAL take apart.
 //   binary: the 16-byte VGRQ request; reads exactly 40 bytes (socket_read_binary_integer(10))
 //           and checks magic and length.
+// --reply-label: the endpoint's `reply_label: true` replies (label and confidence after the
+// pose: ur 10 values, abb 2 more fields, fanuc 85 bytes, binary 48 bytes), checked as strictly.
+// --check-order ORDER [--label N] --truth FILE --journal FILE: at the end, whether this robot
+// got exactly the parts its part order says, against the emulator's truth and vgrd's journal
+// (sim/sort_check.hpp); the summary line gets a "check" object, and a failed check exits 1.
 // (`strict` is a push protocol, not a poll: tests/integration/robot_wire_test.cpp plays it.)
 // Every reply is parsed with all six degrees of freedom and printed as x, y, z mm and the
 // Z-Y-X Euler angles rz, ry, rx in degrees (the journal's convention), whatever the dialect's
@@ -18,6 +23,12 @@
 // "TRIG,<job>,<pose>", the flange pose written in the dialect's own notation (ur: URScript's
 // printed pose p[...] in m/rad; abb: RAPID's ValToStr [[x,y,z],[q1,q2,q3,q4]]; fanuc:
 // x,y,z,w,p,r as KAREL writes them; binary: the 40-byte request).
+//
+// --program FILE... --config CELL (abb, fanuc, ur): plays an example robot program of
+// examples/robot/ that applies offsets (sim/robot/robot_program.hpp): sends the program's
+// own requests (RAPID's JOB,<n># once per connection, then its GET), and for every OK
+// reply prints where the program would move the tool and which part pose that picks
+// ("part_x_mm" ... in the base frame), for a test to hold against the renderer's truth.
 //
 // Output: one line per reply on stdout (JSON with --json); diagnostics on stderr.
 // A reply that does not come within --timeout-ms counts as invalid (the protocol promises a
@@ -31,6 +42,7 @@
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #endif
 
+#include <algorithm>
 #include <array>
 #include <charconv>
 #include <chrono>
@@ -56,9 +68,12 @@
 #include <boost/asio/write.hpp>
 #include <nlohmann/json.hpp>
 
+#include "config/cell_config.hpp"
 #include "core/log.hpp"
 #include "core/pose.hpp"
 #include "protocol/robot_codec.hpp"
+#include "sim/robot/robot_program.hpp"
+#include "sim/sort_check.hpp"
 
 namespace {
 
@@ -71,7 +86,6 @@ using vgr::protocol::Dialect;
 constexpr auto kConnectWindow = std::chrono::seconds(10);
 constexpr auto kConnectRetryDelay = std::chrono::milliseconds(200);
 constexpr std::size_t kMaxReplyBytes = 1024;  // ur/fanuc: give up looking for the end after this
-constexpr double kPi = 3.14159265358979323846;
 
 struct Options {
   std::string dialect;
@@ -85,6 +99,12 @@ struct Options {
   bool json = false;
   std::string abbRotation = "zyx";
   std::string snapshot;  // "x,y,z,qw,qx,qy,qz" mm + quaternion: send TRIG with this flange pose
+  std::vector<std::string> program;  // --program files
+  std::string config;                // --config: the cell the program's robot is in
+  bool replyLabel = false;
+  std::string checkOrder;  // best_score | by_label | label_only | random; empty = no check
+  int label = 0;           // label_only: the robot's label
+  std::string truthPath, journalPath;
 };
 
 double round3(double v);
@@ -96,6 +116,12 @@ struct Parsed {
   int status = 0;
   long long cycle = 0;
   double xMm = 0, yMm = 0, zMm = 0, rzDeg = 0, ryDeg = 0, rxDeg = 0;
+  // The six pose numbers as the dialect carries them (ur m + rad rotation vector; abb zyx
+  // mm + rz, ry, rx deg; fanuc mm + W, P, R; binary µm + millidegrees / 1000), for --program.
+  // Not set for abb quaternion replies (--program refuses them).
+  std::array<double, 6> values{};
+  int label = 0;
+  double confidence = 0;
 };
 
 // Fills the six values from the pose the reply carries.
@@ -114,13 +140,18 @@ double round3(double v) {
   return r == 0.0 ? 0.0 : r;  // no -0 in the output
 }
 
-Parsed parseBinary(const std::string& raw) {
+Parsed parseBinary(const std::string& raw, bool withLabel) {
   namespace bin = vgr::protocol::binary;
   Parsed p;
-  if (raw.size() != bin::kReplyBytes || static_cast<std::uint32_t>(bin::readInt32(raw, 0)) != bin::kReplyMagic ||
-      bin::readInt32(raw, 4) != static_cast<std::int32_t>(bin::kReplyBytes)) {
-    p.error = "not a 40-byte VGRA frame";
+  const std::size_t bytes = withLabel ? bin::kLabelReplyBytes : bin::kReplyBytes;
+  if (raw.size() != bytes || static_cast<std::uint32_t>(bin::readInt32(raw, 0)) != bin::kReplyMagic ||
+      bin::readInt32(raw, 4) != static_cast<std::int32_t>(bytes)) {
+    p.error = fmt::format("not a {}-byte VGRA frame", bytes);
     return p;
+  }
+  if (withLabel) {
+    p.label = bin::readInt32(raw, 40);
+    p.confidence = bin::readInt32(raw, 44) / 1000.0;
   }
   p.status = bin::readInt32(raw, 8);
   p.cycle = bin::readInt32(raw, 12);
@@ -129,21 +160,27 @@ Parsed parseBinary(const std::string& raw) {
                            bin::readInt32(raw, 28) / 1000.0};
   setPose(p, vgr::poseFromEulerZyxDeg(bin::readInt32(raw, 16) / 1000.0, bin::readInt32(raw, 20) / 1000.0,
                                       bin::readInt32(raw, 24) / 1000.0, e));
+  for (std::size_t i = 0; i < 6; ++i) p.values[i] = bin::readInt32(raw, 16 + 4 * i) / 1000.0;
   p.valid = true;
   return p;
 }
 
-Parsed parseReply(Dialect dialect, bool abbQuaternion, const std::string& raw) {
-  if (dialect == Dialect::Binary) return parseBinary(raw);
+Parsed parseReply(Dialect dialect, bool abbQuaternion, const std::string& raw, bool withLabel) {
+  if (dialect == Dialect::Binary) return parseBinary(raw, withLabel);
   static const std::regex kUr(R"(\(-?\d+,\d+(,-?\d+\.\d{6}){6}\))");
   static const std::regex kAbb(R"(-?\d+,\d+(,-?\d+\.\d{3}){6})");
   static const std::regex kAbbQuat(R"(-?\d+,\d+(,-?\d+\.\d{3}){3}(,-?\d\.\d{5}){4})");
   // Fixed columns: status, cycle, X, Y, Z, W, P, R, CR LF (docs/protocols.md, "fanuc").
   static const std::regex kFanuc(R"([+-]\d{4},\d{7}(,[+-]\d{5}\.\d{3}){3}(,[+-]\d{3}\.\d{3}){3}\r\n)");
-  const std::regex& re = dialect == Dialect::Ur      ? kUr
-                         : dialect == Dialect::Fanuc ? kFanuc
-                         : abbQuaternion             ? kAbbQuat
-                                                     : kAbb;
+  // reply_label: label and confidence after the pose.
+  static const std::regex kUrLabel(R"(\(-?\d+,\d+(,-?\d+\.\d{6}){6},\d{1,3},[01]\.\d{3}\))");
+  static const std::regex kAbbLabel(R"(-?\d+,\d+(,-?\d+\.\d{3}){6},\d{1,3},[01]\.\d{3})");
+  static const std::regex kAbbQuatLabel(R"(-?\d+,\d+(,-?\d+\.\d{3}){3}(,-?\d\.\d{5}){4},\d{1,3},[01]\.\d{3})");
+  static const std::regex kFanucLabel(R"([+-]\d{4},\d{7}(,[+-]\d{5}\.\d{3}){3}(,[+-]\d{3}\.\d{3}){3},\d{3},[01]\.\d{3}\r\n)");
+  const std::regex& re = dialect == Dialect::Ur      ? (withLabel ? kUrLabel : kUr)
+                         : dialect == Dialect::Fanuc ? (withLabel ? kFanucLabel : kFanuc)
+                         : abbQuaternion             ? (withLabel ? kAbbQuatLabel : kAbbQuat)
+                                                     : (withLabel ? kAbbLabel : kAbb);
   Parsed p;
   if (!std::regex_match(raw, re)) {
     p.error = "does not match the dialect";
@@ -156,8 +193,9 @@ Parsed parseReply(Dialect dialect, bool abbQuaternion, const std::string& raw) {
   std::string_view body(raw);
   if (dialect == Dialect::Ur) body = body.substr(1, body.size() - 2);
   if (dialect == Dialect::Fanuc) body = body.substr(0, body.size() - 2);
-  std::array<double, 7> v{};
-  const std::size_t fields = dialect == Dialect::Abb && abbQuaternion ? 9 : 8;
+  std::array<double, 9> v{};
+  const std::size_t poseFields = dialect == Dialect::Abb && abbQuaternion ? 9 : 8;  // with status, cycle
+  const std::size_t fields = poseFields + (withLabel ? 2 : 0);
   std::size_t field = 0;
   while (field < fields) {
     const std::size_t comma = body.find(',');
@@ -179,6 +217,7 @@ Parsed parseReply(Dialect dialect, bool abbQuaternion, const std::string& raw) {
     if (comma == std::string_view::npos) break;
     body.remove_prefix(comma + 1);
   }
+  if (!(dialect == Dialect::Abb && abbQuaternion)) std::copy(v.begin(), v.begin() + 6, p.values.begin());
   if (dialect == Dialect::Ur) {  // metres + rotation vector
     setPose(p, vgr::poseFromRotationVector(v[0] * 1000.0, v[1] * 1000.0, v[2] * 1000.0, vgr::Vec3{v[3], v[4], v[5]}));
   } else if (dialect == Dialect::Fanuc) {  // mm + W, P, R degrees
@@ -192,6 +231,11 @@ Parsed parseReply(Dialect dialect, bool abbQuaternion, const std::string& raw) {
     setPose(p, vgr::poseFromQuaternion(v[0], v[1], v[2], v[3], v[4], v[5], v[6]));
   } else {  // mm + Z-Y-X degrees rz, ry, rx
     setPose(p, vgr::poseFromEulerZyxDeg(v[0], v[1], v[2], vgr::EulerZyxDeg{v[3], v[4], v[5]}));
+  }
+  if (withLabel) {
+    const std::size_t at = poseFields - 2;  // v holds the values after status and cycle
+    p.label = static_cast<int>(v[at]);
+    p.confidence = v[at + 1];
   }
   p.valid = true;
   return p;
@@ -216,8 +260,10 @@ std::string snapshotPoseText(Dialect dialect, const vgr::Pose& f) {
 
 class SimRobot {
  public:
-  SimRobot(asio::io_context& io, Options opt, Dialect dialect, const std::optional<vgr::Pose>& flange)
-      : io_(io), opt_(std::move(opt)), dialect_(dialect), socket_(io), timer_(io), signals_(io, SIGINT, SIGTERM) {
+  SimRobot(asio::io_context& io, Options opt, Dialect dialect, const std::optional<vgr::Pose>& flange,
+           std::optional<vgr::sim::RobotProgram> program)
+      : io_(io), opt_(std::move(opt)), dialect_(dialect), program_(std::move(program)), socket_(io), timer_(io),
+        signals_(io, SIGINT, SIGTERM) {
     namespace bin = vgr::protocol::binary;
     const std::string what = flange ? "TRIG," + std::to_string(opt_.job) + "," + snapshotPoseText(dialect_, *flange)
                                     : "GET," + std::to_string(opt_.job);
@@ -227,6 +273,7 @@ class SimRobot {
       case Dialect::Binary: request_ = bin::encodeRequest(flange ? bin::kCmdTrigger : bin::kCmdGet, opt_.job, flange); break;
       default: request_ = what + "#"; break;
     }
+    if (program_) request_ = program_->request;
   }
 
   void start() {
@@ -263,6 +310,7 @@ class SimRobot {
         socket_.set_option(tcp::no_delay(true), optEc);
         vgr::log::info("sim", "{}: connected to {}:{}", opt_.name, opt_.host, opt_.port);
         rx_.clear();
+        setupLeft_ = program_ ? program_->setup.size() : 0;
         exchange();
         return;
       }
@@ -287,7 +335,9 @@ class SimRobot {
     timer_.async_wait([this, id](const error_code& ec) {
       if (!ec && id == exchangeId_) onTimeout();
     });
-    asio::async_write(socket_, asio::buffer(request_), [this, id](const error_code& ec, std::size_t) {
+    // A program's setup requests (RAPID: JOB,<n>#) go first on every connection.
+    const std::string& request = setupLeft_ > 0 ? program_->setup[program_->setup.size() - setupLeft_] : request_;
+    asio::async_write(socket_, asio::buffer(request), [this, id](const error_code& ec, std::size_t) {
       if (id != exchangeId_ || done_) return;
       if (ec) {
         connectionLost(ec);
@@ -315,7 +365,10 @@ class SimRobot {
   // Bytes of rx_ that make one complete reply, or 0 while incomplete: ur up to ')' like
   // socket_read_ascii_float, fanuc up to CR LF like KAREL's READ, binary 40 bytes.
   std::size_t frameLength() const {
-    if (dialect_ == Dialect::Binary) return rx_.size() >= vgr::protocol::binary::kReplyBytes ? vgr::protocol::binary::kReplyBytes : 0;
+    if (dialect_ == Dialect::Binary) {
+      const std::size_t bytes = opt_.replyLabel ? vgr::protocol::binary::kLabelReplyBytes : vgr::protocol::binary::kReplyBytes;
+      return rx_.size() >= bytes ? bytes : 0;
+    }
     const std::string_view end = dialect_ == Dialect::Ur ? ")" : "\r\n";
     const std::size_t at = rx_.find(end);
     return at == std::string::npos ? 0 : at + end.size();
@@ -357,6 +410,18 @@ class SimRobot {
 
   void replied(const std::string& raw) {
     retire();
+    if (setupLeft_ > 0) {
+      // The answer to a setup request: status 0 or the program stops (RAPID: Stop).
+      --setupLeft_;
+      const Parsed p = parseReply(dialect_, opt_.abbRotation == "quaternion", raw, opt_.replyLabel);
+      if (!p.valid || p.status != 0) {
+        std::cerr << "vgr-sim-robot: " << opt_.name << ": setup request refused: " << raw << "\n";
+        finish(1);
+        return;
+      }
+      exchange();
+      return;
+    }
     record(raw, {});
     next();
   }
@@ -417,13 +482,14 @@ class SimRobot {
     ++replies_;
     Parsed p;
     if (failure.empty()) {
-      p = parseReply(dialect_, opt_.abbRotation == "quaternion", rawBytes);
+      p = parseReply(dialect_, opt_.abbRotation == "quaternion", rawBytes, opt_.replyLabel);
     } else {
       p.error = failure;
     }
     if (p.valid) {
       ++valid_;
       if (p.status == 0) ++ok_;
+      got_.push_back({p.status, static_cast<std::uint32_t>(p.cycle), p.xMm, p.yMm, p.label, p.confidence});
     } else {
       ++invalid_;
     }
@@ -442,10 +508,26 @@ class SimRobot {
         line["rz_deg"] = p.rzDeg;
         line["ry_deg"] = p.ryDeg;
         line["rx_deg"] = p.rxDeg;
+        if (opt_.replyLabel) {
+          line["label"] = p.label;
+          line["confidence"] = p.confidence;
+        }
       } else {
         line["error"] = p.error;
       }
       line["raw"] = raw;
+      if (p.valid && p.status == 0 && program_) {
+        // Where the program moves the tool, and the part that picks (base frame).
+        const vgr::Pose tool = program_->tcp(p.values);
+        const vgr::Pose part = vgr::compose(tool, vgr::inverse(program_->grip));
+        const auto e = vgr::toEulerZyxDeg(part);
+        line["part_x_mm"] = part.x;
+        line["part_y_mm"] = part.y;
+        line["part_z_mm"] = part.z;
+        line["part_rz_deg"] = e.rz;
+        line["part_ry_deg"] = e.ry;
+        line["part_rx_deg"] = e.rx;
+      }
       std::cout << line.dump(-1, ' ', false, Json::error_handler_t::replace) << std::endl;
     } else if (p.valid) {
       std::cout << fmt::format("{} #{} valid status={} cycle={} x={:.3f} y={:.3f} z={:.3f} rz={:.3f} ry={:.3f} rx={:.3f} raw={}",
@@ -467,8 +549,14 @@ class SimRobot {
     summary["invalid"] = invalid_;
     summary["ok"] = ok_;
     summary["reconnects"] = reconnects_;
+    bool checkFailed = false;
+    if (!opt_.checkOrder.empty()) {
+      Json check = orderCheck();
+      checkFailed = !check.value("ok", false);
+      summary["check"] = std::move(check);
+    }
     std::cout << summary.dump() << std::endl;
-    exitCode_ = forcedCode >= 0 ? forcedCode : (invalid_ > 0 ? 1 : 0);
+    exitCode_ = forcedCode >= 0 ? forcedCode : ((invalid_ > 0 || checkFailed) ? 1 : 0);
     error_code ignored;
     socket_.close(ignored);
     timer_.cancel();
@@ -476,9 +564,45 @@ class SimRobot {
     io_.stop();
   }
 
+  // --check-order: the replies against the truth and the journal (sim/sort_check.hpp).
+  Json orderCheck() const {
+    using vgr::config::PartOrder;
+    const PartOrder order = opt_.checkOrder == "by_label"     ? PartOrder::ByLabel
+                            : opt_.checkOrder == "label_only" ? PartOrder::LabelOnly
+                            : opt_.checkOrder == "random"     ? PartOrder::Random
+                                                              : PartOrder::BestScore;
+    Json j;
+    j["order"] = opt_.checkOrder;
+    if (order == PartOrder::LabelOnly) j["label"] = opt_.label;
+    auto truth = vgr::sim::readTruthFile(opt_.truthPath);
+    auto journal = vgr::sim::readJournalFile(opt_.journalPath, opt_.job);
+    if (!truth || !journal) {
+      j["ok"] = false;
+      j["problem"] = !truth ? truth.error().message : journal.error().message;
+      return j;
+    }
+    const vgr::sim::SortCheck c = vgr::sim::checkSorting(order, opt_.label, *truth, *journal, got_);
+    j["ok"] = c.ok();
+    j["cycles"] = c.cycles;
+    j["unseen"] = c.unseen;
+    j["expected"] = c.expected;
+    j["delivered"] = c.delivered;
+    j["missed"] = c.missed;
+    j["wrong_label"] = c.wrongLabel;
+    j["extra"] = c.extra;
+    j["duplicates"] = c.duplicates;
+    j["out_of_order"] = c.outOfOrder;
+    j["missing_no_part"] = c.missingNoPart;
+    j["max_pos_err_mm"] = round3(c.maxPosErrMm);
+    if (!c.firstProblem.empty()) j["problem"] = c.firstProblem;
+    return j;
+  }
+
   asio::io_context& io_;
   const Options opt_;
   const Dialect dialect_;
+  const std::optional<vgr::sim::RobotProgram> program_;
+  std::size_t setupLeft_ = 0;  // setup requests still to send on this connection
   tcp::socket socket_;
   asio::steady_timer timer_;  // connect retry, reply timeout, interval: one at a time
   asio::signal_set signals_;
@@ -490,6 +614,7 @@ class SimRobot {
   std::array<char, vgr::protocol::kAbbMaxReplyChars> abbBuf_{};  // abb: one SocketReceive
   std::uint64_t exchangeId_ = 0;                                 // bumps retire the callbacks of a finished exchange
   std::uint64_t replies_ = 0, valid_ = 0, invalid_ = 0, ok_ = 0, reconnects_ = 0;
+  std::vector<vgr::sim::RobotGot> got_;  // every valid reply, for --check-order
   bool done_ = false;
   int exitCode_ = 0;
 };
@@ -515,7 +640,20 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"zyx", "quaternion"}));
   app.add_option("--snapshot", opt.snapshot,
                  "eye-in-hand: send TRIG,<job>,<flange pose> instead of GET; the pose as x,y,z,qw,qx,qy,qz (mm, quaternion)");
+  app.add_option("--program", opt.program, "play this robot program of examples/robot/ (fanuc: vgr_bg.kl and VGR_PICK.ls)");
+  app.add_option("--config", opt.config, "with --program: the cell config the robot (--name) is in");
+  app.add_flag("--reply-label", opt.replyLabel, "replies carry label and confidence (the endpoint's reply_label: true)");
+  auto* check = app.add_option("--check-order", opt.checkOrder,
+                               "at the end, check the parts got against --truth and --journal for this part order")
+                    ->check(CLI::IsMember({"best_score", "by_label", "label_only", "random"}));
+  app.add_option("--label", opt.label, "label_only: the robot's label")->check(CLI::Range(0, 32767));
+  app.add_option("--truth", opt.truthPath, "the camera emulator's truth.jsonl (--check-order)");
+  app.add_option("--journal", opt.journalPath, "vgrd's journal (--check-order)");
   if (const auto rc = vgr::cli::parse(app, argc, argv)) return *rc;
+  if (check->count() > 0 && (opt.truthPath.empty() || opt.journalPath.empty() || !opt.replyLabel)) {
+    std::cerr << "vgr-sim-robot: --check-order needs --truth, --journal and --reply-label\n";
+    return 2;
+  }
   const std::optional<Dialect> dialect = vgr::protocol::parseDialect(opt.dialect);
   if (!dialect) return 2;  // unreachable: checked by CLI11
   if (opt.name.empty()) opt.name = opt.dialect;
@@ -541,10 +679,35 @@ int main(int argc, char** argv) {
     }
     flange = vgr::poseFromQuaternion(v[0], v[1], v[2], v[3], v[4], v[5], v[6]);
   }
+  std::optional<vgr::sim::RobotProgram> program;
+  if (!opt.program.empty()) {
+    // The example programs send their own requests (GET) and read Z-Y-X replies.
+    if (flange || opt.abbRotation != "zyx") {
+      std::cerr << "vgr-sim-robot: --program plays the example program's own GET and Z-Y-X replies: not with "
+                   "--snapshot or --abb-rotation quaternion\n";
+      return 2;
+    }
+    if (opt.config.empty()) {
+      std::cerr << "vgr-sim-robot: --program needs --config (the cell whose robot --name it plays)\n";
+      return 2;
+    }
+    auto cell = vgr::config::loadCellConfig(opt.config);
+    if (!cell) {
+      std::cerr << "vgr-sim-robot: " << cell.error().message << "\n";
+      return 2;
+    }
+    auto p = vgr::sim::loadRobotProgram(opt.program, *dialect, *cell, opt.name);
+    if (!p) {
+      std::cerr << "vgr-sim-robot: " << p.error().message << "\n";
+      return 2;
+    }
+    vgr::log::info("sim", "{}: playing {}", opt.name, p->summary);
+    program = std::move(*p);
+  }
 
   try {
     asio::io_context io;
-    SimRobot robot(io, opt, *dialect, flange);
+    SimRobot robot(io, opt, *dialect, flange, std::move(program));
     robot.start();
     io.run();
     return robot.exitCode();

@@ -6,7 +6,8 @@
 //  - for every decoded request, formatReply() in all four reply dialects with a pose made of
 //    raw input bytes (NaN, infinities, huge values, non-unit quaternions included): each
 //    reply within its dialect's contract (ABB <= 80 chars, FANUC exactly 75 bytes ending in
-//    CR LF, binary 40 bytes with its magic, UR one parenthesised tuple);
+//    CR LF, binary 40 bytes with its magic, UR one parenthesised tuple), and the same with
+//    reply_label and a raw label / confidence (ABB <= 80, UR 10 values, FANUC 85, binary 48);
 //  - StrictExchange with the paper's tokens fed the same stream: every event legal for its
 //    step, log details printable, back to Idle after Completed/Failed; with byte 0's top bit
 //    set, in snapshot mode (eye-in-hand): every snapshot pose finite and a unit quaternion.
@@ -54,6 +55,27 @@ void checkReplies(std::string_view stream, std::size_t at, vgr::Status status, s
   check(bin.size() == binary::kReplyBytes);
   check(static_cast<std::uint32_t>(binary::readInt32(bin, 0)) == binary::kReplyMagic);
   check(binary::readInt32(bin, 4) == static_cast<std::int32_t>(binary::kReplyBytes));
+
+  // reply_label: any label and confidence bits (out of range ones must become errors, never
+  // longer replies).
+  std::int32_t rawLabel = 0;
+  for (std::size_t i = 0; i < 4 && !stream.empty(); ++i)
+    rawLabel = static_cast<std::int32_t>((static_cast<std::uint32_t>(rawLabel) << 8) |
+                                         static_cast<unsigned char>(stream[(at + 56 + i) % stream.size()]));
+  reply.label = rawLabel % 2000 - 500;  // mostly around [0, 999], some beyond
+  reply.confidence = rawDouble(stream, at + 64);
+  const std::string abbL = formatReply(Dialect::Abb, reply, true);
+  check(!abbL.empty() && abbL.size() <= kAbbMaxReplyChars);
+  const std::string urL = formatReply(Dialect::Ur, reply, true);
+  check(urL.size() >= 2 && urL.front() == '(' && urL.back() == ')' && urL.find(')') == urL.size() - 1);
+  std::size_t commas = 0;
+  for (const char c : urL) commas += c == ',' ? 1 : 0;
+  check(commas == 9);  // 10 values: socket_read_ascii_float(10), <= 30
+  const std::string fanucL = formatReply(Dialect::Fanuc, reply, true);
+  check(fanucL.size() == kFanucLabelReplyChars && fanucL.ends_with("\r\n"));
+  const std::string binL = formatReply(Dialect::Binary, reply, true);
+  check(binL.size() == binary::kLabelReplyBytes);
+  check(binary::readInt32(binL, 4) == static_cast<std::int32_t>(binary::kLabelReplyBytes));
 }
 
 bool printableAscii(std::string_view s) {

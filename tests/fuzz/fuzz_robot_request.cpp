@@ -71,7 +71,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       const std::string abb = formatReply(Dialect::Abb, reply);
       check(!abb.empty() && abb.size() <= kAbbMaxReplyChars);
       if (req && req->flange) reply.pose = *req->flange;  // a real rotation too
-      const std::string abbQ = formatReply(Dialect::Abb, reply, AbbRotation::Quaternion);
+      const std::string abbQ = formatReply(Dialect::Abb, reply, false, AbbRotation::Quaternion);
       check(!abbQ.empty() && abbQ.size() <= kAbbMaxReplyChars);
       const std::string ur = formatReply(Dialect::Ur, reply);
       check(ur.size() >= 2 && ur.front() == '(' && ur.back() == ')');

@@ -3,6 +3,7 @@
 // simulators) for a few cycles, scored against the renderer's truth; and `--method`, which
 // teaches a job of another method on the textured part and runs the cell with it.
 
+#include <map>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -59,6 +60,39 @@ TEST(demo, MethodWithAConfigOfOnesOwnIsRefusedWithAHint) {
   const DemoRun r = demo("--cycles 1 --method shape --config " + std::string(VGR_SOURCE_DIR) + "/config/examples/sim-cell.yaml");
   EXPECT_EQ(r.rc, 2) << r.out;
   EXPECT_NE(r.out.find("vgr teach"), std::string::npos) << r.out;
+}
+
+// Paper 002's sorting cell (issue 15): three classes mixed, a classifier the demo trains, four
+// robots with best_score, by_label, label_only (label 2) and random orders and reply_label on;
+// each robot simulator checks that it got exactly the parts its order says against the
+// renderer's truth, and the summary says so. Failed before: --classes did not exist.
+TEST(demo, SortingRobotsGetExactlyThePartsTheirOrderSays) {
+  const DemoRun r = demo("--cycles 4 --classes ring,square,rect_notch");
+  ASSERT_EQ(r.rc, 0) << r.out;
+  const auto s = summary(r.out);
+  ASSERT_TRUE(s.is_object()) << r.out;
+  EXPECT_EQ(s["ok"].get<int>(), 4) << r.out;
+  EXPECT_TRUE(s["sorting_ok"].get<bool>()) << r.out;
+  EXPECT_EQ(s["plc_label_errors"].get<int>(), 0) << r.out;
+  const std::map<std::string, std::string> orders{{"ur5", "best_score"}, {"irb", "by_label"}, {"lrmate", "label_only"}, {"picker", "random"}};
+  for (const auto& [robot, order] : orders) {
+    const auto& c = s["sorting"][robot];
+    ASSERT_TRUE(c.is_object()) << robot << "\n" << r.out;
+    EXPECT_EQ(c["order"], order) << robot;
+    EXPECT_TRUE(c["ok"].get<bool>()) << robot << ": " << c.dump();
+    EXPECT_EQ(c["cycles"].get<int>(), 4) << robot;
+    EXPECT_GT(c["delivered"].get<int>(), 0) << robot;
+    EXPECT_EQ(c["delivered"].get<int>(), c["expected"].get<int>()) << robot;
+    EXPECT_LT(c["max_pos_err_mm"].get<double>(), 2.0) << robot;  // the moments centroid vs the truth's grasp point
+  }
+  // The label_only robot got a strict subset of what the best_score robot got.
+  EXPECT_LT(s["sorting"]["lrmate"]["delivered"].get<int>(), s["sorting"]["ur5"]["delivered"].get<int>());
+}
+
+TEST(demo, SortingRefusesAMethodThatFindsOneShapeOnly) {
+  const DemoRun r = demo("--cycles 1 --classes ring,square --method shape");
+  EXPECT_EQ(r.rc, 2) << r.out;
+  EXPECT_NE(r.out.find("moments"), std::string::npos) << r.out;
 }
 
 TEST(demo, AnUnknownMethodIsNamed) {

@@ -175,6 +175,10 @@ TEST_F(mqtt_vgrd, results_resume_after_a_broker_restart_with_the_drops_counted) 
   ASSERT_EQ(metric(web, "vgr_mqtt_connected"), 0);
   constexpr int kAway = 5;  // cycles 2..6: the queue keeps the newest kQueue, drops the rest
   for (int i = 0; i < kAway; ++i) ASSERT_NO_FATAL_FAILURE(cycle());
+  // vgrd hands a result to MQTT after the PLC has it (vgrd_app.cpp), so the last cycle's
+  // RESULT_VALID can come before its enqueue: wait for the queue to take it, then compare.
+  for (int i = 0; i < 100 && metric(web, "vgr_mqtt_dropped_total") + metric(web, "vgr_mqtt_queued") < kAway; ++i)
+    std::this_thread::sleep_for(20ms);
   EXPECT_EQ(metric(web, "vgr_mqtt_dropped_total"), kAway - kQueue);
   EXPECT_EQ(metric(web, "vgr_mqtt_queued"), kQueue);
 

@@ -240,14 +240,20 @@ const std::vector<Case> kCases = {
 
 TEST_F(robot_languages, RapidModuleParsesEveryReply) {
   const std::string mod = example("VgrPick.mod");
-  std::smatch m;
-  ASSERT_TRUE(std::regex_search(mod, m, std::regex(R"re(SocketSend sock \\Str:="([^"]*)")re"))) << "request not found";
-  const std::string request = m[1].str();
-  EXPECT_EQ(request, "GET,1#");
+  // The requests in program order: JOB,<n># once, then GET# (the current job).
+  std::vector<std::string> sends;
+  const std::regex send(R"re(SocketSend sock \\Str:="([^"]*)")re");
+  for (auto it = std::sregex_iterator(mod.begin(), mod.end(), send); it != std::sregex_iterator(); ++it) sends.push_back((*it)[1]);
+  ASSERT_EQ(sends, (std::vector<std::string>{"JOB,1#", "GET#"}));
+  const std::string request = sends[1];
   ASSERT_NE(mod.find("FOR i FROM 1 TO 8"), std::string::npos);
   ASSERT_NE(mod.find("OrientZYX(vals{6}, vals{7}, vals{8})"), std::string::npos);
 
   Socket s(port(Dialect::Abb));
+  s.send(sends[0]);
+  const auto job = rapidParseReply(s.recvOnce(80));
+  ASSERT_TRUE(job);
+  EXPECT_EQ((*job)[0], 0.0f);  // JOB,1: status 0, so the program goes on
   for (const Case& c : kCases) {
     publish(c.cycle, poseZyxDeg(c.x, c.y, c.z, c.rz, c.ry, c.rx));
     s.send(request);

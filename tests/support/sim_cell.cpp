@@ -42,6 +42,8 @@ void SimCell::startCamera() {
 }
 
 void SimCell::startVgrd() {
+  // A second start: the old socket goes first (its destructor unlinks the path the new one binds).
+  notify_.reset();
   notify_ = std::make_unique<NotifySocket>((dir_ / "notify.sock").string());
   ASSERT_TRUE(notify_->ok()) << notify_->path();
   auto p = spawnWithNotify({bin("vgrd"), "--config", configPath_, "--journal", journalPath()}, (dir_ / "vgrd.log").string(),

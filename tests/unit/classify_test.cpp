@@ -162,6 +162,38 @@ TEST(ClassifyMlp, LearnsHeldOutRotationsSavesAndLoads) {
   EXPECT_NE(bad.error().message.find("bad.yaml"), std::string::npos) << bad.error().message;
   EXPECT_NE(bad.error().message.find("12 features"), std::string::npos) << bad.error().message;
   EXPECT_FALSE(cls::PartClassifier::load((dir / "missing.yaml").string()).has_value());
+
+  // Other malformed files: each one line (no newline, no OpenCV source path) naming the file.
+  // Before: a missing count read as "takes 0 features", other feature names of the right
+  // count loaded silently (features fed in the wrong order), and a YAML error came with
+  // OpenCV's version, source file and function.
+  std::string good;
+  {
+    std::ifstream in(path);
+    good.assign((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  }
+  struct Broken {
+    std::string from, to, expect;
+  };
+  const std::vector<Broken> broken = {
+      {"feature_count: 14\n", "", "no 'feature_count'"},
+      {"   - hu1\n   - hu2\n", "   - hu2\n   - hu1\n", "its 'features' are not the 14 this vgr computes, in its order"},
+      {"vgr_classifier: 1\n", "vgr_classifier: 1\nhidden: [ oops\n", "cannot read the classifier"},
+  };
+  for (const Broken& br : broken) {
+    std::string text = good;
+    const auto at = text.find(br.from);
+    ASSERT_NE(at, std::string::npos) << br.from;
+    text.replace(at, br.from.size(), br.to);
+    std::ofstream(dir / "broken.yaml") << text;
+    auto r = cls::PartClassifier::load((dir / "broken.yaml").string());
+    ASSERT_FALSE(r.has_value()) << br.expect;
+    const std::string& m = r.error().message;
+    EXPECT_EQ(m.rfind((dir / "broken.yaml").string() + ": ", 0), 0u) << m;
+    EXPECT_NE(m.find(br.expect), std::string::npos) << m;
+    EXPECT_EQ(m.find('\n'), std::string::npos) << m;
+    EXPECT_EQ(m.find("OpenCV("), std::string::npos) << m;
+  }
   std::filesystem::remove_all(dir);
 }
 

@@ -7,7 +7,9 @@
 
 #include <chrono>
 #include <cmath>
+#include <algorithm>
 #include <optional>
+#include <vector>
 
 #include <boost/asio/io_context.hpp>
 #include <nlohmann/json.hpp>
@@ -29,6 +31,7 @@ vision::Detection det(double u, double v, double score, int label) {
   d.v = v;
   d.score = score;
   d.label = label;
+  d.confidence = 0.5 + 0.1 * label + 0.02 * score;  // distinct per part
   return d;
 }
 
@@ -119,6 +122,65 @@ TEST(cycle_result_path, plc_registers_and_journal_carry_label_and_trigger) {
   ASSERT_EQ(j["parts"].size(), 4u);
   EXPECT_EQ(j["parts"][0]["label"], 2);
   EXPECT_EQ(j["parts"][1]["label"], 1);
+}
+
+// The classifier's confidence reaches every sink with its label: the part poses, the PLC's
+// registers (23: x 1000 int16, 38-39: float32), the journal and the robot replies.
+TEST(cycle_result_path, confidence_reaches_every_sink) {
+  const CycleResult r = labelledResult();
+  ASSERT_EQ(r.parts.size(), 4u);
+  EXPECT_DOUBLE_EQ(r.parts[0].confidence, 0.5 + 0.2 + 0.02 * 0.95);
+  const protocol::ModbusResult m = protocol::modbusResultFrom(r);
+  EXPECT_DOUBLE_EQ(m.confidence, r.parts[0].confidence);
+  protocol::ModbusMap map;
+  map.publishResult(m);
+  EXPECT_EQ(map.input(protocol::modbus::kConfidenceInt), 719);  // 0.719 x 1000
+  EXPECT_EQ(map.holding(protocol::modbus::kConfidenceInt), 719);
+  EXPECT_FLOAT_EQ(protocol::modbus::unpackFloat(map.input(protocol::modbus::kConfidence),
+                                                map.input(protocol::modbus::kConfidence + 1), protocol::WordOrder::HighWordFirst),
+                  0.719f);
+  // The existing registers did not move.
+  EXPECT_EQ(protocol::modbus::kLabel, 22);
+  EXPECT_EQ(protocol::modbus::kScore, 36);
+  EXPECT_EQ(protocol::modbus::kXInt, 40);
+
+  const auto j = nlohmann::json::parse(Journal::toJson(r));
+  EXPECT_DOUBLE_EQ(j["parts"][1]["confidence"].get<double>(), 0.618);  // label 1, score 0.9
+
+  const auto replies = ResultStore::replies(r, RobotPolicy{1, 100, PartOrder::BestScore, 0});
+  ASSERT_EQ(replies.size(), 4u);
+  for (std::size_t i = 0; i < 4; ++i) {
+    EXPECT_EQ(replies[i].label, r.parts[i].label);
+    EXPECT_DOUBLE_EQ(replies[i].confidence, r.parts[i].confidence);
+  }
+}
+
+// Paper 002's random selection: every part once, in an order drawn from the cycle id (the
+// same on every call for one result), not always the locator's.
+TEST(cycle_result_path, random_order_serves_every_part_once) {
+  CycleResult r = labelledResult();
+  int differs = 0;
+  for (std::uint32_t cycle = 1; cycle <= 40; ++cycle) {
+    r.cycleId = cycle;
+    const auto a = ResultStore::replies(r, RobotPolicy{1, 100, PartOrder::Random, 0});
+    const auto b = ResultStore::replies(r, RobotPolicy{1, 100, PartOrder::Random, 0});
+    ASSERT_EQ(a.size(), 4u);
+    std::vector<double> xs;
+    bool same = true, inLocatorOrder = true;
+    for (std::size_t i = 0; i < 4; ++i) {
+      xs.push_back(a[i].pose.x);
+      same = same && a[i].pose.x == b[i].pose.x;
+      inLocatorOrder = inLocatorOrder && a[i].pose.x == r.parts[i].pose.x;
+    }
+    EXPECT_TRUE(same) << "cycle " << cycle;
+    std::sort(xs.begin(), xs.end());
+    std::vector<double> want;
+    for (const auto& p : r.parts) want.push_back(p.pose.x);
+    std::sort(want.begin(), want.end());
+    EXPECT_EQ(xs, want) << "cycle " << cycle;
+    differs += inLocatorOrder ? 0 : 1;
+  }
+  EXPECT_GT(differs, 20);  // 23 of 24 permutations differ from the locator's order
 }
 
 }  // namespace

@@ -86,12 +86,14 @@ TEST(overlay, PartsAndCaptionFromACycleResult) {
   p.angleImgDeg = -45;
   p.score = 0.5;
   p.label = 2;
+  p.confidence = 0.875;
   const auto parts = vgr::vision::overlayParts(std::vector<vgr::PartResult>{p});
   ASSERT_EQ(parts.size(), 1u);
   EXPECT_EQ(parts[0].u, 12.5);
   EXPECT_EQ(parts[0].v, 7.25);
   EXPECT_EQ(parts[0].angleDeg, -45);
   EXPECT_EQ(parts[0].label, 2);
+  EXPECT_EQ(parts[0].confidence, 0.875);  // drawn next to the label
   EXPECT_EQ(vgr::vision::cycleCaption(17, 1, vgr::Status::Ok, 2), "cycle 17  job 1  OK  2 parts");
   EXPECT_EQ(vgr::vision::cycleCaption(18, 1, vgr::Status::CameraError, 0), "cycle 18  job 1  -4 CAMERA_ERROR");
 }

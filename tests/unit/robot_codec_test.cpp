@@ -451,3 +451,91 @@ TEST(robot_splitter, BinaryBytesAreARequest) {
 
 }  // namespace
 }  // namespace vgr::protocol
+
+// ---------------------------------------------------------------------------------------
+// reply_label: the part's label and confidence after the pose (robot_codec.hpp, withLabel)
+
+namespace vgr::protocol {
+namespace {
+
+RobotReply labelledReply(std::uint32_t cycle, const Pose& p, int label, double confidence) {
+  RobotReply r = okReply(cycle, p);
+  r.label = label;
+  r.confidence = confidence;
+  return r;
+}
+
+TEST(robot_label, GoldenEveryDialect) {
+  const RobotReply r = labelledReply(4711, poseFromXyzRz(512.3, -120.05, 35.0, deg(-12.5)), 3, 0.9536);
+  EXPECT_EQ(formatReply(Dialect::Ur, r, true), "(0,4711,0.512300,-0.120050,0.035000,0.000000,0.000000,-0.218166,3,0.954)");
+  EXPECT_EQ(formatReply(Dialect::Abb, r, true), "0,4711,512.300,-120.050,35.000,-12.500,0.000,0.000,3,0.954");
+  EXPECT_EQ(formatReply(Dialect::Fanuc, r, true),
+            "+0000,0004711,+00512.300,-00120.050,+00035.000,+000.000,+000.000,-012.500,003,0.954\r\n");
+  EXPECT_EQ(formatReply(Dialect::Fanuc, r, true).size(), kFanucLabelReplyChars);
+  const std::string bin = formatReply(Dialect::Binary, r, true);
+  ASSERT_EQ(bin.size(), binary::kLabelReplyBytes);
+  EXPECT_EQ(binary::readInt32(bin, 4), 48);
+  EXPECT_EQ(binary::readInt32(bin, 8), 0);
+  EXPECT_EQ(binary::readInt32(bin, 12), 4711);
+  EXPECT_EQ(binary::readInt32(bin, 16), 512300);
+  EXPECT_EQ(binary::readInt32(bin, 40), 3);
+  EXPECT_EQ(binary::readInt32(bin, 44), 954);
+  // Without reply_label every dialect is byte for byte what it was.
+  EXPECT_EQ(formatReply(Dialect::Ur, r), "(0,4711,0.512300,-0.120050,0.035000,0.000000,0.000000,-0.218166)");
+  EXPECT_EQ(formatReply(Dialect::Abb, r), "0,4711,512.300,-120.050,35.000,-12.500,0.000,0.000");
+  EXPECT_EQ(formatReply(Dialect::Binary, r).size(), binary::kReplyBytes);
+  EXPECT_EQ(formatReply(Dialect::Fanuc, r).size(), kFanucReplyChars);
+  // Strict has no room: its frame stays paper 002's.
+  EXPECT_EQ(formatReply(Dialect::Strict, r, true), formatReply(Dialect::Strict, r));
+}
+
+TEST(robot_label, ErrorRepliesCarryZeroLabel) {
+  RobotReply r = labelledReply(12, poseFromXyzRz(1, 2, 3, 0), 4, 0.99);
+  r.status = Status::NoPartFound;
+  EXPECT_EQ(formatReply(Dialect::Ur, r, true), "(1,12,0.000000,0.000000,0.000000,0.000000,0.000000,0.000000,0,0.000)");
+  EXPECT_EQ(formatReply(Dialect::Abb, r, true), "1,12,0.000,0.000,0.000,0.000,0.000,0.000,0,0.000");
+}
+
+TEST(robot_label, LabelTheWireCannotCarryIsAnError) {
+  for (const auto& [label, conf] : std::vector<std::pair<int, double>>{{1000, 0.9}, {-1, 0.9}, {2, 1.5}, {2, std::nan("")}}) {
+    const RobotReply r = labelledReply(5, poseFromXyzRz(1, 2, 3, 0), label, conf);
+    EXPECT_EQ(formatReply(Dialect::Abb, r, true), "-8,5,0.000,0.000,0.000,0.000,0.000,0.000,0,0.000") << label << " " << conf;
+    EXPECT_EQ(formatReply(Dialect::Ur, r, true).substr(0, 6), "(-8,5,") << label;
+    EXPECT_EQ(formatReply(Dialect::Fanuc, r, true).substr(0, 6), "-0008,") << label;
+  }
+  // The largest label and a confidence of 1 fit.
+  EXPECT_EQ(formatReply(Dialect::Abb, labelledReply(5, poseFromXyzRz(1, 2, 3, 0), kMaxReplyLabel, 1.0), true),
+            "0,5,1.000,2.000,3.000,0.000,0.000,0.000,999,1.000");
+}
+
+// RAPID's 80 characters and URScript's 30 values hold for every reply the daemon can send
+// (cycle ids below 2^23, any label the wire takes, every status, extreme poses).
+TEST(robot_label, AbbStaysWithin80AndUrWithin30Values) {
+  const std::regex abbLabel(R"(-?\d+,\d+(,-?\d+\.\d{3}){6},\d{1,3},[01]\.\d{3})");
+  const std::regex urLabel(R"(\(-?\d+,\d+(,-?\d+\.\d{6}){6},\d{1,3},[01]\.\d{3}\))");
+  const std::vector<Status> statuses = {Status::Ok, Status::NoPartFound, Status::Internal, Status::OffsetOutOfLimits};
+  const std::vector<Eigen::Vector3d> angles = {{-179.9996, -89.9, -179.9996}, {180.0, 0.0, 180.0}, {-123.456, -45.678, -98.765}};
+  std::size_t longest = 0;
+  for (Status s : statuses)
+    for (std::uint32_t cycle : {0u, 8388607u})
+      for (double x : {-99999.999, 0.0, 99999.999})
+        for (const auto& a : angles)
+          for (int label : {0, 7, kMaxReplyLabel}) {
+            RobotReply r = labelledReply(cycle, poseZyx(x, -99999.999, -99999.999, a.x(), a.y(), a.z()), label, 0.9995);
+            r.status = s;
+            const std::string abb = formatReply(Dialect::Abb, r, true);
+            ASSERT_LE(abb.size(), kAbbMaxReplyChars) << abb;
+            ASSERT_TRUE(std::regex_match(abb, abbLabel)) << abb;
+            if (s == Status::Ok) {
+              EXPECT_EQ(abb.substr(0, 2), "0,") << abb;  // never turned into an error by its length
+            }
+            const std::string ur = formatReply(Dialect::Ur, r, true);
+            ASSERT_TRUE(std::regex_match(ur, urLabel)) << ur;
+            EXPECT_EQ(numbers(ur).size(), 10u);
+            longest = std::max(longest, abb.size());
+          }
+  EXPECT_GE(longest, 78u);  // the sweep reached the longest Ok reply
+}
+
+}  // namespace
+}  // namespace vgr::protocol

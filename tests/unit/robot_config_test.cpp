@@ -56,6 +56,18 @@ TEST(robot_config, EveryDialectAndTheNewKeys) {
     EXPECT_NE(std::string(vgr::config::dialectName(d)), "?");
 }
 
+// Paper 002's random selection and the label in the replies (docs/protocols.md).
+TEST(robot_config, RandomOrderAndReplyLabel) {
+  auto c = parseCellConfig(cell(R"(  - {name: a, port: 50010, part_order: random, reply_label: true}
+  - {name: b, dialect: fanuc, port: 50012}
+)"),
+                           "cell.yaml");
+  ASSERT_TRUE(c) << c.error().message;
+  EXPECT_EQ(c->robots[0].partOrder, vgr::config::PartOrder::Random);
+  EXPECT_TRUE(c->robots[0].replyLabel);
+  EXPECT_FALSE(c->robots[1].replyLabel);  // default: replies as before
+}
+
 TEST(robot_config, ErrorsNameFileLineAndKey) {
   struct Bad {
     std::string robots;
@@ -66,8 +78,15 @@ TEST(robot_config, ErrorsNameFileLineAndKey) {
        "cell.yaml:6: key 'robots[1].job': no job with id 3 in jobs"},
       {"  - {name: a, port: 1, allowed_clients: [robot.local]}\n",
        "cell.yaml:5: key 'robots[0].allowed_clients[0]': expected a numeric IP address, got 'robot.local'"},
-      {"  - {name: a, port: 1, part_order: random}\n",
-       "cell.yaml:5: key 'robots[0].part_order': out of range: expected one of: best_score, by_label, label_only, got 'random'"},
+      {"  - {name: a, port: 1, part_order: shuffled}\n",
+       "cell.yaml:5: key 'robots[0].part_order': out of range: expected one of: best_score, by_label, label_only, random, got 'shuffled'"},
+      {"  - {name: a, port: 1, reply_label: yes please}\n",
+       "cell.yaml:5: key 'robots[0].reply_label': expected true or false, got 'yes please'"},
+      {"  - {name: a, port: 1, dialect: strict, reply_label: true}\n",
+       "cell.yaml:5: key 'robots[0].reply_label': the strict dialect's pose frame has no room for a label (paper 002's six values)"},
+      {"  - {name: a, port: 1, dialect: abb, abb_rotation: quaternion, reply_label: true}\n",
+       "cell.yaml:5: key 'robots[0].reply_label': abb_rotation quaternion leaves no room for the label within RAPID's 80 "
+       "characters; use abb_rotation zyx"},
       {"  - {name: a, port: 1, part_order: label_only}\n",
        "cell.yaml:5: key 'robots[0].label': part_order label_only needs a label"},
       {"  - {name: a, port: 1, strict: {command: X}}\n", "cell.yaml:5: key 'robots[0].strict': only for dialect strict"},

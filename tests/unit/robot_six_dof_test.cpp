@@ -63,7 +63,7 @@ TEST(robot_six_dof, GoldenRepliesInEveryDialect) {
   const RobotReply r = okReply(9, kTilted);
   EXPECT_EQ(formatReply(Dialect::Ur, r), "(0,9,0.612500,-0.040250,0.455000,1.200152,-2.217794,0.206403)");
   EXPECT_EQ(formatReply(Dialect::Abb, r), "0,9,612.500,-40.250,455.000,-120.000,-35.000,170.000");
-  EXPECT_EQ(formatReply(Dialect::Abb, r, AbbRotation::Quaternion), "0,9,612.500,-40.250,455.000,0.30099,0.45235,-0.83590,0.07780");
+  EXPECT_EQ(formatReply(Dialect::Abb, r, false, AbbRotation::Quaternion), "0,9,612.500,-40.250,455.000,0.30099,0.45235,-0.83590,0.07780");
   EXPECT_EQ(formatReply(Dialect::Fanuc, r),
             "+0000,0000009,+00612.500,-00040.250,+00455.000,+170.000,-035.000,-120.000\r\n");
   EXPECT_EQ(formatReply(Dialect::Binary, r),
@@ -78,19 +78,35 @@ TEST(robot_six_dof, GoldenRepliesInEveryDialect) {
 TEST(robot_six_dof, AbbQuaternionReplyStaysWithin80CharactersAndErrorsCarryTheIdentity) {
   // The longest possible Ok reply: every field at its widest.
   const Pose wide = poseFromQuaternion(-99999.999, -99999.999, -99999.999, 0.5, -0.5, -0.5, -0.5);
-  const std::string worst = formatReply(Dialect::Abb, okReply(8388607, wide), AbbRotation::Quaternion);
+  const std::string worst = formatReply(Dialect::Abb, okReply(8388607, wide), false, AbbRotation::Quaternion);
   EXPECT_EQ(worst, "0,8388607,-99999.999,-99999.999,-99999.999,0.50000,-0.50000,-0.50000,-0.50000");
   EXPECT_LE(worst.size(), kAbbMaxReplyChars);
   RobotReply e = okReply(12, kTilted);
   e.status = Status::NoPartFound;
-  EXPECT_EQ(formatReply(Dialect::Abb, e, AbbRotation::Quaternion), "1,12,0.000,0.000,0.000,1.00000,0.00000,0.00000,0.00000");
+  EXPECT_EQ(formatReply(Dialect::Abb, e, false, AbbRotation::Quaternion), "1,12,0.000,0.000,0.000,1.00000,0.00000,0.00000,0.00000");
   e.status = Status::OffsetOutOfLimits;
-  const std::string err = formatReply(Dialect::Abb, e, AbbRotation::Quaternion);
+  const std::string err = formatReply(Dialect::Abb, e, false, AbbRotation::Quaternion);
   EXPECT_EQ(err, "-9,12,0.000,0.000,0.000,1.00000,0.00000,0.00000,0.00000");
   // A quaternion stored with w < 0 is sent with q1 >= 0 (the same rotation).
   const Pose flipped{1, 2, 3, -kTilted.qw, -kTilted.qx, -kTilted.qy, -kTilted.qz};
-  EXPECT_EQ(formatReply(Dialect::Abb, okReply(1, flipped), AbbRotation::Quaternion),
+  EXPECT_EQ(formatReply(Dialect::Abb, okReply(1, flipped), false, AbbRotation::Quaternion),
             "0,1,1.000,2.000,3.000,0.30099,0.45235,-0.83590,0.07780");
+}
+
+TEST(robot_six_dof, AbbQuaternionWithTheLabelNeverExceeds80Characters) {
+  // A near pose fits with the label (config/ refuses quaternion + reply_label anyway); the
+  // widest would need 88 characters and becomes -8 with zeros, never a truncated line.
+  RobotReply near = okReply(9, kTilted);
+  near.label = 3;
+  near.confidence = 0.954;
+  EXPECT_EQ(formatReply(Dialect::Abb, near, true, AbbRotation::Quaternion),
+            "0,9,612.500,-40.250,455.000,0.30099,0.45235,-0.83590,0.07780,3,0.954");
+  RobotReply wide = okReply(8388607, poseFromQuaternion(-99999.999, -99999.999, -99999.999, 0.5, -0.5, -0.5, -0.5));
+  wide.label = 999;
+  wide.confidence = 1.0;
+  const std::string out = formatReply(Dialect::Abb, wide, true, AbbRotation::Quaternion);
+  EXPECT_EQ(out, "-8,8388607,0.000,0.000,0.000,1.00000,0.00000,0.00000,0.00000,0,0.000");
+  EXPECT_LE(out.size(), kAbbMaxReplyChars);
 }
 
 TEST(robot_six_dof, ModbusRegistersCarryAllSixFloatsAndTheirMirrors) {

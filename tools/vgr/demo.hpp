@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "tools/vgr/subcommand.hpp"
 
@@ -23,6 +24,13 @@ struct DemoOptions {
   // says `multi`), the way an integrator teaches a reference part. Embedded config only.
   std::string method;
   std::string scene;           // with `method`: part (default) or multi (sim.scene, docs/ground-truth.md)
+  // Non-empty: paper 002's sorting cell (docs/demo.md "Sorting"): these part classes mixed
+  // in every frame (sim.classes), a job of `method` (moments: every blob a part) with a
+  // classifier `vgr classify train` makes from a rendered training set, and four robots each
+  // served by its own part order (best_score, by_label, label_only, random) with reply_label
+  // on; each robot simulator checks that it got exactly the parts its order says.
+  std::vector<std::string> classes;
+  int parts = 4;               // with `classes`: parts per frame, [1, 16]
 };
 
 // Returns the process exit code: 0 when every cycle delivered a pose and every robot reply

@@ -3,7 +3,8 @@
 //   vgr check --config FILE   validate a cell config
 //   vgr cameras [--json]      list the GigE Vision cameras on the network (docs/cameras.md)
 //   vgr grab --camera ID ...  trigger N frames, report errors and latency (docs/cameras.md)
-//   vgr calibrate intrinsics|handeye|plane|synth ...   calibration (docs/calibration.md)
+//   vgr calibrate intrinsics|handeye|plane|synth|verify ...   calibration (docs/calibration.md)
+//   vgr repeatability --config CELL --shots N   spread of a still part (docs/commissioning.md)
 //   vgr sim render | teach | locate | eval   localization datasets, jobs, runs (docs/localization.md)
 //   vgr classify train | eval   paper 002's part classifier (docs/classification.md)
 //   vgr replay --journal J --archive A --job DIR   a changed job on archived frames (docs/commissioning.md)
@@ -23,6 +24,7 @@
 #include "tools/vgr/calibrate_intrinsics.hpp"
 #include "tools/vgr/calibrate_plane.hpp"
 #include "tools/vgr/calibrate_synth.hpp"
+#include "tools/vgr/calibrate_verify.hpp"
 #include "tools/vgr/classify.hpp"
 #include "tools/vgr/cameras.hpp"
 #include "tools/vgr/check.hpp"
@@ -30,6 +32,7 @@
 #include "tools/vgr/eval.hpp"
 #include "tools/vgr/grab.hpp"
 #include "tools/vgr/locate.hpp"
+#include "tools/vgr/repeatability.hpp"
 #include "tools/vgr/replay.hpp"
 #include "tools/vgr/sim_render.hpp"
 #include "tools/vgr/subcommand.hpp"
@@ -45,7 +48,7 @@ struct Group {
   const char* description;
 };
 constexpr Group kGroups[] = {
-    {"calibrate", "camera intrinsics, hand-eye, synthetic calibration data"},
+    {"calibrate", "camera intrinsics, hand-eye, work plane, synthetic calibration data, verify"},
     {"sim", "simulation tools"},
     {"classify", "part classifier of paper 002: train, eval (docs/classification.md)"},
 };
@@ -74,10 +77,12 @@ int main(int argc, char** argv) {
       {"calibrate", std::make_unique<tools::CalibrateHandEyeCommand>()},
       {"calibrate", std::make_unique<tools::CalibratePlaneCommand>()},
       {"calibrate", std::make_unique<tools::CalibrateSynthCommand>()},
+      {"calibrate", std::make_unique<tools::CalibrateVerifyCommand>()},
       {"sim", std::make_unique<tools::SimRenderCommand>()},
       {nullptr, std::make_unique<tools::TeachCommand>()},
       {nullptr, std::make_unique<tools::LocateCommand>()},
       {nullptr, std::make_unique<tools::EvalCommand>()},
+      {nullptr, std::make_unique<tools::RepeatabilityCommand>()},
       {nullptr, std::make_unique<tools::ReplayCommand>()},
       {"classify", std::make_unique<tools::ClassifyTrainCommand>()},
       {"classify", std::make_unique<tools::ClassifyEvalCommand>()},

@@ -32,6 +32,8 @@ CLI::App* SimRenderCommand::add(CLI::App& parent) {
   renderCmd->add_option("--illum-ratio", d.scene.illumRatio, "lighting gradient, brightest : darkest (1 = even)")->check(CLI::Range(1.0, 10.0));
   renderCmd->add_option("--clutter", d.scene.clutter, "distractor shapes per image")->check(CLI::Range(0, 64));
   renderCmd->add_option("--decoys", d.scene.decoys, "pieces of the part's own faces lying on the belt, per image")->check(CLI::Range(0, 16));
+  renderCmd->add_flag("--plain", d.scene.plainFaces,
+                      "texture-less parts: uniform top faces, no grain, no printed marks (holes, walls, noise, clutter stay)");
   renderCmd->add_option("--parts", d.scene.partsPerImage, "parts per non-empty image")->check(CLI::Range(1, 16));
   renderCmd->add_option("--empty-ratio", d.scene.emptyRatio, "share of images without a part")->check(CLI::Range(0.0, 1.0));
   renderCmd->add_option("--width", d.scene.width, "image width, px")->check(CLI::Range(64, 2448));

@@ -72,6 +72,12 @@ int runTeach(const TeachOptions& o) {
     if (eq == std::string::npos || eq == 0) return badInput(fmt::format("--param: expected NAME=VALUE, got '{}'", p));
     job.taught.params[p.substr(0, eq)] = p.substr(eq + 1);
   }
+  if (!o.polarity.empty()) {
+    if (job.method != "moments" && job.method != "hu" && job.method != "shape")
+      return badInput(fmt::format("--polarity: method {} has no polarity (moments, hu and shape have)", job.method));
+    if (job.taught.params.contains("polarity")) return badInput("--polarity and --param polarity=...: give it once");
+    job.taught.params["polarity"] = o.polarity;
+  }
   if (!o.regionsFile.empty()) {
     auto regs = config::loadRegions(o.regionsFile);
     if (!regs) return badInput(regs.error().message);
@@ -103,6 +109,10 @@ CLI::App* TeachCommand::add(CLI::App& parent) {
   teachCmd->add_option("--roi", t.roi, "search region X,Y,W,H in live images (default: whole image)");
   teachCmd->add_option("--method", t.method, "locate method");
   teachCmd->add_option("--param", t.params, "method parameter NAME=VALUE (repeatable)");
+  teachCmd->add_option("--polarity", t.polarity,
+                       "moments, hu, shape: use (the template's dark/bright sense, default), ignore_global (a part may "
+                       "be inverted), ignore_local (shape only: each edge may be)")
+      ->check(CLI::IsMember({"use", "ignore_global", "ignore_local"}));
   teachCmd->add_option("--regions", t.regionsFile, "YAML file with a 'regions' list (e.g. a dataset's template.yaml)");
   teachCmd->add_flag("!--no-auto-regions", t.autoRegions, "do not split regions from the template's contours");
   teachCmd->add_option("--min-score", t.minScore, "[0, 1]")->check(CLI::Range(0.0, 1.0));

@@ -16,6 +16,9 @@ struct TeachOptions {
   double minScore = 0.5, angleMin = -180, angleMax = 180, partHeightMm = 0;
   int maxParts = 1;
   bool autoRegions = true;
+  // --polarity: params.polarity of moments, hu and shape (use | ignore_global | ignore_local);
+  // empty = the method's default (use). A --param polarity=... says the same; both: an error.
+  std::string polarity;
 };
 
 int runTeach(const TeachOptions& o);

@@ -122,10 +122,19 @@ Result<PartClassifier> PartClassifier::load(const std::string& path) {
     cv::FileStorage fs(path, cv::FileStorage::READ);
     if (!fs.isOpened() || fs["vgr_classifier"].empty())
       return fail(Status::BadArgument, path + ": not a vgr classifier (no 'vgr_classifier' key)");
+    if (!fs["feature_count"].isInt()) return fail(Status::BadArgument, path + ": no 'feature_count' (an integer) in the classifier");
     const int features = static_cast<int>(fs["feature_count"]);
     if (features != kFeatureCount)
       return fail(Status::BadArgument, path + ": the classifier takes " + std::to_string(features) +
                                            " features, this vgr computes " + std::to_string(kFeatureCount));
+    // The same count of other features (another order, another vgr) would be read silently
+    // as this vgr's: the names must be this vgr's, in its order.
+    std::vector<std::string> names;
+    for (const auto& n : fs["features"]) names.push_back(static_cast<std::string>(n));
+    const auto& ours = featureNames();
+    if (names.size() != ours.size() || !std::equal(names.begin(), names.end(), ours.begin()))
+      return fail(Status::BadArgument, path + ": its 'features' are not the " + std::to_string(kFeatureCount) +
+                                           " this vgr computes, in its order (" + ours.front() + ", ..., " + ours.back() + ")");
     auto impl = std::make_shared<Impl>();
     for (const auto& n : fs["classes"]) impl->names.push_back(static_cast<std::string>(n));
     fs["hidden"] >> impl->hidden;
@@ -144,7 +153,10 @@ Result<PartClassifier> PartClassifier::load(const std::string& path) {
     out.impl_ = std::move(impl);
     return out;
   } catch (const cv::Exception& e) {
-    return fail(Status::BadArgument, path + ": cannot read the classifier: " + e.msg);
+    // e.err is the reason alone (e.msg adds OpenCV's version, source file and function).
+    std::string why = e.err;
+    std::replace(why.begin(), why.end(), '\n', ' ');
+    return fail(Status::BadArgument, path + ": cannot read the classifier: " + why);
   }
 }
 

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <fmt/core.h>
 #include <numbers>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -15,6 +16,7 @@
 #include "core/angles.hpp"
 #include "vision/locate/feature_match.hpp"
 #include "vision/locate/params.hpp"
+#include "vision/locate/shape_matcher.hpp"
 
 namespace vgr::vision {
 namespace {
@@ -42,6 +44,17 @@ struct CwParams {
   double rDeg = 5;              // [0.1, 45] eq. (6) rotation radius r (paper: 5)
   double lFraction = 0.2;       // [0.01, 1] eq. (6) translation radius l / circumscribed radius (paper: 0.2)
   bool perHeightShift = true;   // a translation per height group (see searchGrid); false = eq. (6) as written
+  // Where theta_init, d_init come from (section III.A gives ORB; parts without texture have
+  // too few keypoints for it): "orb" = paper 000's ORB + grid + eq. (2) only; "gradient" = the
+  // shape matcher's gradient-direction search (shape_matcher.hpp) only; "auto" = ORB when the
+  // template has at least minTemplateKeypoints ORB keypoints and the candidate gives enough
+  // consistent matches, the gradient search otherwise.
+  enum class Init { Auto, Orb, Gradient } init = Init::Auto;
+  int minTemplateKeypoints = 100;  // [3, 20000] auto: fewer template keypoints = texture-less, no ORB
+  int autoOrbMatches = 24;         // [3, 1000] auto: fewer matches passing eq. (2) = too little texture
+                                   // (measured: textured 35-68 per part, plain faces 8-17)
+  double initMinScore = 0.3;       // [0.1, 1] the gradient search's min_score (a rigid fit of all heights:
+                                   // 0.66 measured for a part in an image corner, the boss 35 px off)
 };
 
 // One contour point of the template, relative to the grasp point, with its unit gradient
@@ -164,11 +177,13 @@ class ContourWeightedLocator final : public Locator {
  public:
   // groups: the contour points by height group; graspGroup: the group whose translation
   // is the grasp point's.
-  ContourWeightedLocator(const TaughtTemplate& taught, CwParams p, Features tmpl,
-                         std::vector<std::vector<ContourPoint>> groups, size_t graspGroup, double partArea,
-                         double circumRadius)
-      : taught_(taught), p_(std::move(p)), tmpl_(std::move(tmpl)), groups_(std::move(groups)), graspGroup_(graspGroup),
-        partArea_(partArea), l_(p_.lFraction * circumRadius) {
+  // useOrb: the ORB initial pose is tried first; gradient: the texture-free initial pose
+  // (may be null when useOrb).
+  ContourWeightedLocator(const TaughtTemplate& taught, CwParams p, Features tmpl, bool useOrb,
+                         std::unique_ptr<Locator> gradient, std::vector<std::vector<ContourPoint>> groups,
+                         size_t graspGroup, double partArea, double circumRadius)
+      : taught_(taught), p_(std::move(p)), tmpl_(std::move(tmpl)), useOrb_(useOrb), gradient_(std::move(gradient)),
+        groups_(std::move(groups)), graspGroup_(graspGroup), partArea_(partArea), l_(p_.lFraction * circumRadius) {
     // A thinned copy (about 400 points) for the coarse search stage.
     size_t n = 0;
     for (const auto& g : groups_) n += g.size();
@@ -208,6 +223,7 @@ class ContourWeightedLocator final : public Locator {
     };
     std::vector<Found> found;
     bool gradientsReady = false;
+    initials_.reset();
     for (size_t c = 0; c < contours.size(); ++c) {
       const double area = cv::contourArea(contours[c]);
       if (area < p_.minAreaRatio * partArea_ || area > p_.maxAreaRatio * partArea_) continue;
@@ -217,7 +233,23 @@ class ContourWeightedLocator final : public Locator {
         gradientsReady = true;
       }
       Found f;
-      if (!locateCandidate(img, contours, static_cast<int>(c), f.d, f.pairs, f.candidates)) continue;
+      bool ok = false;
+      if (useOrb_) {
+        // auto: an ORB pose resting on few matches (texture-less faces: outline corners that
+        // match several places) is not trusted when the gradient search can give one.
+        const int needed = p_.init == CwParams::Init::Auto && gradient_ ? std::max(p_.minMatches, p_.autoOrbMatches) : p_.minMatches;
+        auto init = orbInitialPose(img, contours, static_cast<int>(c), f.pairs, f.candidates);
+        if (init && static_cast<int>(f.pairs.size()) >= needed) ok = refine(*init, contours[c], f.d);
+      }
+      if (!ok && gradient_) {
+        // No texture to match (or the ORB pose did not pass eq. 7): the gradient search's pose.
+        f.pairs.clear();
+        f.candidates = 0;
+        auto init = gradientInitialPose(img, contours[c]);
+        if (!init) return std::unexpected(init.error());
+        ok = init->has_value() && refine(**init, contours[c], f.d);
+      }
+      if (!ok) continue;
       f.d.u += roi.x;
       f.d.v += roi.y;
       for (MatchPair& m : f.pairs) {
@@ -237,9 +269,32 @@ class ContourWeightedLocator final : public Locator {
   }
 
  private:
-  // theta_init, d_init from ORB matches in one candidate, then the eq. (5)-(7) refinement.
-  bool locateCandidate(const cv::Mat& img, const std::vector<std::vector<cv::Point>>& contours, int which, Detection& d,
-                       std::vector<MatchPair>& pairs, int& candidates) {
+  // theta_init (deg, CCW as displayed) and d_init (the grasp point, ROI px) of section III.A.
+  struct Initial {
+    double thetaDeg = 0;
+    cv::Point2d d;
+  };
+
+  // The initial pose from the gradient-direction search (the shape matcher, run once per image
+  // on the ROI; its regions let the grasp point follow its own height): the best of its parts
+  // whose grasp point lies on the candidate; nullopt when none does. An Error only when the
+  // search itself failed.
+  Result<std::optional<Initial>> gradientInitialPose(const cv::Mat& img, const std::vector<cv::Point>& contour) {
+    if (!initials_) {
+      auto out = gradient_->locate(img);
+      if (!out) return std::unexpected(out.error());
+      initials_ = std::move(out->parts);
+    }
+    for (const Detection& g : *initials_)  // best score first
+      if (cv::pointPolygonTest(contour, cv::Point2f(static_cast<float>(g.u), static_cast<float>(g.v)), true) >= -2.0)
+        return std::optional<Initial>(Initial{g.angleDeg, {g.u, g.v}});
+    return std::optional<Initial>{};
+  }
+
+  // theta_init, d_init from ORB matches in one candidate (section III.A); nullopt when there
+  // are too few consistent matches.
+  std::optional<Initial> orbInitialPose(const cv::Mat& img, const std::vector<std::vector<cv::Point>>& contours, int which,
+                                        std::vector<MatchPair>& pairs, int& candidates) {
     const int margin = 12;
     const cv::Rect box = (cv::boundingRect(contours[static_cast<size_t>(which)]) + cv::Size(2 * margin, 2 * margin) -
                           cv::Point(margin, margin)) & cv::Rect(0, 0, img.cols, img.rows);
@@ -247,7 +302,7 @@ class ContourWeightedLocator final : public Locator {
     cv::drawContours(mask, contours, which, cv::Scalar(255), cv::FILLED, cv::LINE_8, cv::noArray(), 0, -box.tl());
     cv::dilate(mask, mask, cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * margin - 1, 2 * margin - 1}));
     const Features cand = detail::detectOrb(img(box), mask, p_.orb.imageFeatures, p_.orb);
-    if (cand.keypoints.size() < static_cast<size_t>(p_.minMatches) || tmpl_.keypoints.size() < 3) return false;
+    if (cand.keypoints.size() < static_cast<size_t>(p_.minMatches) || tmpl_.keypoints.size() < 3) return std::nullopt;
 
     // Hypothetical matches by brute force (Hamming), template -> candidate.
     cv::BFMatcher bf(cv::NORM_HAMMING, true);
@@ -280,12 +335,12 @@ class ContourWeightedLocator final : public Locator {
       src.push_back(pa);
       dst.push_back(qa);
     }
-    if (static_cast<int>(src.size()) < p_.minMatches) return false;
+    if (static_cast<int>(src.size()) < p_.minMatches) return std::nullopt;
 
     // Local linear (similarity) transformation re-screen with eq. (2): ||q_i - H(p_i)|| < tau.
     std::vector<unsigned char> inl;
     cv::Mat A = cv::estimateAffinePartial2D(src, dst, inl, cv::RANSAC, p_.tauPx, 2000, 0.995, 10);
-    if (A.empty()) return false;
+    if (A.empty()) return std::nullopt;
     std::vector<cv::Point2f> s2, d2;
     for (size_t k = 0; k < src.size(); ++k) {
       const cv::Point2f h(static_cast<float>(A.at<double>(0, 0) * src[k].x + A.at<double>(0, 1) * src[k].y + A.at<double>(0, 2)),
@@ -295,14 +350,25 @@ class ContourWeightedLocator final : public Locator {
         d2.push_back(dst[k]);
       }
     }
-    if (static_cast<int>(s2.size()) < p_.minMatches) return false;
+    if (static_cast<int>(s2.size()) < p_.minMatches) return std::nullopt;
     // [[a, -b, tx], [b, a, ty]]: the turn counter-clockwise as displayed is -atan2(b, a).
     const double a = A.at<double>(0, 0), b = A.at<double>(1, 0);
     const double scale = std::hypot(a, b);
-    if (scale < 0.8 || scale > 1.25) return false;
-    const double thetaInit = -std::atan2(b, a) / kDegToRad;
-    const cv::Point2d dInit(box.x + a * taught_.grasp.u - b * taught_.grasp.v + A.at<double>(0, 2),  // d_init: the grasp
-                            box.y + b * taught_.grasp.u + a * taught_.grasp.v + A.at<double>(1, 2));  // point through it
+    if (scale < 0.8 || scale > 1.25) return std::nullopt;
+    Initial init;
+    init.thetaDeg = -std::atan2(b, a) / kDegToRad;
+    init.d = cv::Point2d(box.x + a * taught_.grasp.u - b * taught_.grasp.v + A.at<double>(0, 2),  // d_init: the grasp
+                         box.y + b * taught_.grasp.u + a * taught_.grasp.v + A.at<double>(1, 2));  // point through it
+    for (size_t k = 0; k < s2.size(); ++k)
+      pairs.push_back({{s2[k].x, s2[k].y}, {d2[k].x + box.x, d2[k].y + box.y}});
+    return init;
+  }
+
+  // Section III.B from an initial pose: eq. (6)'s search of eq. (5) inside theta_init +- r,
+  // d_init +- l, and eq. (7)'s test. False: S_max <= sigma, or outside the job's angle range.
+  bool refine(const Initial& initial, const std::vector<cv::Point>& contour, Detection& d) {
+    const double thetaInit = initial.thetaDeg;
+    const cv::Point2d dInit = initial.d;
 
     // Eq. (6): S_max over theta_init +- r, d_init +- l, coarse to fine (a full-resolution
     // exhaustive grid would cost ~1e9 samples per part).
@@ -328,16 +394,17 @@ class ContourWeightedLocator final : public Locator {
     d.v = best.d[graspGroup_].y;
     d.angleDeg = normaliseDeg(best.theta);
     d.score = score;
-    d.areaPx = cv::contourArea(contours[static_cast<size_t>(which)]);
+    d.areaPx = cv::contourArea(contour);
     if (d.angleDeg < taught_.angleMinDeg || d.angleDeg > taught_.angleMaxDeg) return false;
-    for (size_t k = 0; k < s2.size(); ++k)
-      pairs.push_back({{s2[k].x, s2[k].y}, {d2[k].x + box.x, d2[k].y + box.y}});
     return true;
   }
 
   TaughtTemplate taught_;
   CwParams p_;
   Features tmpl_;
+  bool useOrb_;
+  std::unique_ptr<Locator> gradient_;
+  std::optional<std::vector<Detection>> initials_;  // per image: the gradient search's parts, computed when first needed
   std::vector<std::vector<ContourPoint>> groups_, coarse_;
   size_t graspGroup_;
   double weight_ = 1, coarseWeight_ = 1;
@@ -388,6 +455,11 @@ Result<std::unique_ptr<Locator>> makeContourWeightedLocator(const cv::Mat& templ
   p.rDeg = r.number("r_deg", p.rDeg, 0.1, 45);
   p.lFraction = r.number("l_fraction", p.lFraction, 0.01, 1);
   p.perHeightShift = r.flag("per_height_shift", p.perHeightShift);
+  const std::string init = r.word("initial_pose", "auto", {"auto", "orb", "gradient"});
+  p.init = init == "orb" ? CwParams::Init::Orb : init == "gradient" ? CwParams::Init::Gradient : CwParams::Init::Auto;
+  p.minTemplateKeypoints = r.integer("min_template_keypoints", p.minTemplateKeypoints, 3, 20000);
+  p.autoOrbMatches = r.integer("auto_orb_matches", p.autoOrbMatches, 3, 1000);
+  p.initMinScore = r.number("init_min_score", p.initMinScore, 0.1, 1);
   if (auto ok = r.finish(); !ok) return std::unexpected(ok.error());
   if (p.edgeHigh < p.edgeLow) return fail(Status::BadArgument, name + ": parameter 'edge_high' must not be below 'edge_low'");
 
@@ -405,9 +477,35 @@ Result<std::unique_ptr<Locator>> makeContourWeightedLocator(const cv::Mat& templ
   cv::Mat grownMask;
   cv::dilate(partMask, grownMask, cv::getStructuringElement(cv::MORPH_ELLIPSE, {23, 23}));
   Features tmpl = detail::detectOrb(templateGray, grownMask, p.orb.templateFeatures, p.orb);
-  if (static_cast<int>(tmpl.keypoints.size()) < p.minMatches)
-    return fail(Status::BadArgument, fmt::format("{}: only {} ORB features in the template ({} needed): too little texture",
-                                                 name, tmpl.keypoints.size(), p.minMatches));
+  const int keypoints = static_cast<int>(tmpl.keypoints.size());
+  if (p.init == CwParams::Init::Orb && keypoints < p.minMatches)
+    return fail(Status::BadArgument, fmt::format("{}: only {} ORB features in the template ({} needed): too little texture "
+                                                 "for initial_pose orb (auto or gradient need none)",
+                                                 name, keypoints, p.minMatches));
+  const bool useOrb = p.init == CwParams::Init::Orb ||
+                      (p.init == CwParams::Init::Auto && keypoints >= std::max(p.minMatches, p.minTemplateKeypoints));
+
+  // The texture-free initial pose: the shape matcher's gradient-direction search (its public
+  // Locator), on the same template, grasp point, regions and angle range (widened by r so a
+  // part at the range's edge still gets an initial pose); only its own default parameters.
+  std::unique_ptr<Locator> gradient;
+  if (p.init != CwParams::Init::Orb) {
+    TaughtTemplate g;
+    g.grasp = taught.grasp;
+    g.minScore = p.initMinScore;
+    g.maxParts = std::min(64, 2 * taught.maxParts + 2);
+    g.angleMinDeg = std::max(-180.0, taught.angleMinDeg - p.rDeg);
+    g.angleMaxDeg = std::min(180.0, taught.angleMaxDeg + p.rDeg);
+    g.regions = taught.regions;
+    auto made = makeShapeLocator(templateGray, g);
+    if (!made) {
+      if (!useOrb)
+        return fail(Status::BadArgument, fmt::format("{}: {} ORB features in the template and no gradient search for the "
+                                                     "initial pose ({})", name, keypoints, made.error().message));
+    } else {
+      gradient = std::move(*made);
+    }
+  }
 
   // The contour: pixels with a significant gradient (Canny edges) on the part, with their
   // gradients (section III.B, first paragraph).
@@ -546,8 +644,8 @@ Result<std::unique_ptr<Locator>> makeContourWeightedLocator(const cv::Mat& templ
     ++modelPoints;
   }
   if (modelPoints < 20) return fail(Status::BadArgument, name + ": fewer than 20 weighted contour points in the template");
-  return std::make_unique<ContourWeightedLocator>(taught, std::move(p), std::move(tmpl), std::move(groups), graspGroup,
-                                                  partArea, static_cast<double>(circumRadius));
+  return std::make_unique<ContourWeightedLocator>(taught, std::move(p), std::move(tmpl), useOrb, std::move(gradient),
+                                                  std::move(groups), graspGroup, partArea, static_cast<double>(circumRadius));
 }
 
 }  // namespace vgr::vision

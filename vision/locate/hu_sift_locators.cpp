@@ -12,6 +12,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/angles.hpp"
+#include "vision/locate/blob_polarity.hpp"
 #include "vision/locate/params.hpp"
 
 namespace vgr::vision {
@@ -40,12 +41,14 @@ struct HuParams {
   double maxAreaPx = 1e7;
   double minHoleFraction = 0.015;  // inner contours below this share of the outer area are noise
   double shapeScale = 0.15;    // matchShapes distance at which the score is 0.5
+  BlobSense sense = BlobSense::Bright;  // which side of the threshold is the part (blob_polarity.hpp)
 };
 
 struct Blob {
   std::vector<cv::Point> outer;
   std::vector<std::vector<cv::Point>> holes;
   double cx = 0, cy = 0, angleDeg = 0;  // centroid px, principal axis as displayed (CCW), (-180, 180]
+  BlobSense sense = BlobSense::Bright;   // the segmentation it came from (Bright or Dark)
   // Template only: binary samples around the centroid (offset px, value), to tell the two
   // directions of the principal axis apart.
   std::vector<std::pair<cv::Point2f, bool>> samples;
@@ -99,15 +102,12 @@ class HuLocator final : public Locator {
   HuLocator(HuParams p, Blob reference, const TaughtTemplate& taught) : p_(p), ref_(std::move(reference)), taught_(taught) {}
   std::string_view method() const override { return "hu"; }
 
-  static Result<std::vector<Blob>> blobs(const cv::Mat& gray, const HuParams& p, cv::Mat& bin) {
-    if (p.threshold > 0)
-      cv::threshold(gray, bin, p.threshold, 255, cv::THRESH_BINARY);
-    else
-      cv::threshold(gray, bin, 0, 255, cv::THRESH_BINARY | cv::THRESH_OTSU);
+  // The part blobs of one sense (Bright or Dark; bin: that segmentation, 255 = part) appended to out.
+  static void blobs(const cv::Mat& gray, const HuParams& p, BlobSense sense, cv::Mat& bin, std::vector<Blob>& out) {
+    segment(gray, p.threshold, sense, bin);
     std::vector<std::vector<cv::Point>> contours;
     std::vector<cv::Vec4i> hierarchy;
     cv::findContours(bin, contours, hierarchy, cv::RETR_CCOMP, cv::CHAIN_APPROX_NONE);
-    std::vector<Blob> out;
     const cv::Rect inner(1, 1, gray.cols - 2, gray.rows - 2);
     for (std::size_t i = 0; i < contours.size(); ++i) {
       if (hierarchy[i][3] >= 0) continue;  // not an outer contour
@@ -117,21 +117,23 @@ class HuLocator final : public Locator {
       if ((box & inner) != box) continue;  // touches the border: its shape is cut
       Blob b;
       b.outer = contours[i];
+      b.sense = sense;
       for (int k = hierarchy[i][2]; k >= 0; k = hierarchy[k][0])
         if (cv::contourArea(contours[k]) >= p.minHoleFraction * area) b.holes.push_back(contours[k]);
       out.push_back(std::move(b));
     }
-    return out;
   }
 
   Result<LocateOutput> locate(const cv::Mat& gray) override {
     if (gray.empty() || gray.type() != CV_8UC1) return fail(Status::BadArgument, "hu: expected a non-empty 8-bit gray image");
     const cv::Rect roi = searchRect(taught_, gray);
-    auto found = blobs(gray(roi), p_, bin_);
-    if (!found) return std::unexpected(found.error());
+    found_.clear();
+    if (p_.sense != BlobSense::Dark) blobs(gray(roi), p_, BlobSense::Bright, binBright_, found_);
+    if (p_.sense != BlobSense::Bright) blobs(gray(roi), p_, BlobSense::Dark, binDark_, found_);
     LocateOutput out;
     const double gx = taught_.grasp.u - ref_.cx, gy = taught_.grasp.v - ref_.cy;
-    for (Blob& b : *found) {
+    for (Blob& b : found_) {
+      const cv::Mat& bin = b.sense == BlobSense::Dark ? binDark_ : binBright_;
       double d = huDistance(ref_.outer, b.outer);
       if (d > 20 * p_.shapeScale) continue;
       // Inner contours one-to-one: each template hole takes its closest free candidate hole
@@ -153,11 +155,11 @@ class HuLocator final : public Locator {
       Detection det;
       det.score = 1.0 / (1.0 + d / p_.shapeScale);
       if (det.score < taught_.minScore) continue;
-      poseOf(bin_, b);
+      poseOf(bin, b);
       // The principal axis leaves 180 degrees open: take the turn under which the template's
       // region agrees better with this one.
       double rot = normaliseDeg(b.angleDeg - ref_.angleDeg);
-      if (agreement(ref_, bin_, b.cx, b.cy, normaliseDeg(rot + 180)) > agreement(ref_, bin_, b.cx, b.cy, rot))
+      if (agreement(ref_, bin, b.cx, b.cy, normaliseDeg(rot + 180)) > agreement(ref_, bin, b.cx, b.cy, rot))
         rot = normaliseDeg(rot + 180);
       if (rot < taught_.angleMinDeg || rot > taught_.angleMaxDeg) continue;
       const PixelPoint g = turn(gx, gy, rot);
@@ -176,7 +178,8 @@ class HuLocator final : public Locator {
   HuParams p_;
   Blob ref_;
   TaughtTemplate taught_;
-  cv::Mat bin_;  // scratch, reused between calls
+  cv::Mat binBright_, binDark_;  // scratch, reused between calls: the segmentation of each sense
+  std::vector<Blob> found_;
 };
 
 // ---- sift ------------------------------------------------------------------------------
@@ -324,14 +327,20 @@ Result<std::unique_ptr<Locator>> makeHuLocator(const cv::Mat& templateGray, cons
   p.maxAreaPx = r.number("max_area_px", p.maxAreaPx, 1, 1e9);
   p.minHoleFraction = r.number("min_hole_fraction", p.minHoleFraction, 0, 1);
   p.shapeScale = r.number("shape_scale", p.shapeScale, 1e-4, 10);
+  p.sense = readBlobPolarity(r, templateGray, p.threshold);
   if (auto ok = r.finish(); !ok) return std::unexpected(ok.error());
   if (p.maxAreaPx <= p.minAreaPx) return fail(Status::BadArgument, "hu: parameter 'max_area_px' must exceed 'min_area_px'");
+  if (templateGray.empty() || templateGray.type() != CV_8UC1) return fail(Status::BadArgument, "hu: expected a non-empty 8-bit gray template");
+  // The reference has the template's own sense, also when live parts may be either.
+  const BlobSense own = p.sense == BlobSense::Either ? templateSense(templateGray, p.threshold) : p.sense;
   cv::Mat bin;
-  auto found = HuLocator::blobs(templateGray, p, bin);
-  if (!found) return std::unexpected(found.error());
-  if (found->empty()) return fail(Status::BadArgument, "hu: no part found in the template image (check threshold and area limits)");
+  std::vector<Blob> found;
+  HuLocator::blobs(templateGray, p, own, bin, found);
+  if (found.empty())
+    return fail(Status::BadArgument, fmt::format("hu: no {} part found in the template image (check threshold, area limits "
+                                                 "and polarity)", senseName(own)));
   // The template's part: its largest outer contour.
-  auto best = std::max_element(found->begin(), found->end(), [](const Blob& a, const Blob& b) {
+  auto best = std::max_element(found.begin(), found.end(), [](const Blob& a, const Blob& b) {
     return cv::contourArea(a.outer) < cv::contourArea(b.outer);
   });
   Blob ref = *best;

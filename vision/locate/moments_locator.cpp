@@ -7,6 +7,7 @@
 #include <numbers>
 #include <optional>
 
+#include <fmt/core.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -29,19 +30,17 @@ struct Blob {
   BlobShape shape;
 };
 
-Result<std::vector<Blob>> findBlobs(const cv::Mat& gray, const MomentsParams& params) {
-  if (gray.empty() || gray.type() != CV_8UC1) return fail(Status::BadArgument, "moments: expected a non-empty 8-bit gray image");
-
+// The blobs of one sense (Bright or Dark) appended to `out`.
+void findBlobsOfSense(const cv::Mat& gray, const MomentsParams& params, BlobSense sense, std::vector<Blob>& out) {
   cv::Mat binary;
-  if (params.threshold > 0)
-    cv::threshold(gray, binary, params.threshold, 255, cv::THRESH_BINARY);
-  else
-    cv::threshold(gray, binary, 0, 255, cv::THRESH_BINARY | cv::THRESH_OTSU);
+  segment(gray, params.threshold, sense, binary);
 
   cv::Mat labels, stats, centroids;
   const int n = cv::connectedComponentsWithStats(binary, labels, stats, centroids, 8, CV_32S);
 
-  std::vector<Blob> out;
+  // +1: the part is brighter than the belt, -1: darker. The grey weights below,
+  // (gray - bg) / (fg - bg), are the part's coverage in both cases.
+  const double sign = sense == BlobSense::Dark ? -1.0 : 1.0;
   const cv::Mat kernel = cv::getStructuringElement(cv::MORPH_RECT, {3, 3});
   for (int i = 1; i < n; ++i) {
     const double area = stats.at<int>(i, cv::CC_STAT_AREA);
@@ -63,7 +62,7 @@ Result<std::vector<Blob>> findBlobs(const cv::Mat& gray, const MomentsParams& pa
     if (cv::countNonZero(inner) == 0 || cv::countNonZero(ring) == 0) continue;
     const double fg = cv::mean(gray(roi), inner)[0];
     const double bg = cv::mean(gray(roi), ring)[0];
-    if (fg - bg < 10.0) continue;  // too little contrast for a trustworthy edge
+    if (sign * (fg - bg) < 10.0) continue;  // too little contrast for a trustworthy edge
 
     // Grey-level weights: an edge pixel counts with the fraction of it the part covers, so
     // the moments are sub-pixel. Not clamped at 0, so background noise stays zero-mean.
@@ -95,6 +94,13 @@ Result<std::vector<Blob>> findBlobs(const cv::Mat& gray, const MomentsParams& pa
     d.score = std::min(1.0, anisotropy / 0.1) * std::min(1.0, skew / 0.02);
     out.push_back({d, {m.m00, (m.mu20 + m.mu02) / (m.m00 * m.m00), anisotropy, skew}});
   }
+}
+
+Result<std::vector<Blob>> findBlobs(const cv::Mat& gray, const MomentsParams& params) {
+  if (gray.empty() || gray.type() != CV_8UC1) return fail(Status::BadArgument, "moments: expected a non-empty 8-bit gray image");
+  std::vector<Blob> out;
+  if (params.sense != BlobSense::Dark) findBlobsOfSense(gray, params, BlobSense::Bright, out);
+  if (params.sense != BlobSense::Bright) findBlobsOfSense(gray, params, BlobSense::Dark, out);
   std::sort(out.begin(), out.end(), [](const Blob& a, const Blob& b) { return a.detection.score > b.detection.score; });
   return out;
 }
@@ -190,11 +196,17 @@ Result<std::unique_ptr<Locator>> makeMomentsLocator(const cv::Mat& templateGray,
   // shape_check: false for a job whose classifier decides what each blob is (paper 002:
   // every contour is a candidate, the MLP labels or rejects it; tools/vgr/classify.cpp).
   const bool shapeCheck = r.flag("shape_check", true);
+  p.sense = readBlobPolarity(r, templateGray, p.threshold);
   if (auto ok = r.finish(); !ok) return std::unexpected(ok.error());
   if (p.maxAreaPx <= p.minAreaPx) return fail(Status::BadArgument, "moments: parameter 'max_area_px' must exceed 'min_area_px'");
-  auto ref = findBlobs(templateGray, p);
+  // The reference blob has the template's own sense, also when live parts may be either.
+  MomentsParams own = p;
+  own.sense = p.sense == BlobSense::Either ? templateSense(templateGray, p.threshold) : p.sense;
+  auto ref = findBlobs(templateGray, own);
   if (!ref) return std::unexpected(ref.error());
-  if (ref->empty()) return fail(Status::BadArgument, "moments: no part found in the template image (check threshold and area limits)");
+  if (ref->empty())
+    return fail(Status::BadArgument, fmt::format("moments: no {} part found in the template image (check threshold, area "
+                                                 "limits and polarity)", senseName(own.sense)));
   check.reference = ref->front().shape;
   return std::make_unique<MomentsLocator>(p, ref->front().detection, taught,
                                           shapeCheck ? std::optional(check) : std::nullopt);

@@ -47,6 +47,19 @@ bool ParamReader::flag(const std::string& name, bool fallback) {
   return fallback;
 }
 
+std::string ParamReader::word(const std::string& name, const std::string& fallback, const std::vector<std::string>& allowed) {
+  used_.insert(name);
+  const auto it = params_.find(name);
+  if (it == params_.end()) return fallback;
+  for (const auto& a : allowed)
+    if (it->second == a) return a;
+  std::string list;
+  for (std::size_t i = 0; i < allowed.size(); ++i)
+    list += (i == 0 ? "" : i + 1 == allowed.size() ? " or " : ", ") + allowed[i];
+  setError(name, list, it->second);
+  return fallback;
+}
+
 void ParamReader::setError(const std::string& name, const std::string& expected, const std::string& got) {
   if (error_.empty())
     error_ = fmt::format("{}: parameter '{}': expected {}, got '{}'{}", method_, name, expected, got, whereWritten(name));

@@ -15,6 +15,7 @@
 #include <set>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "core/result.hpp"
 #include "core/taught_template.hpp"
@@ -35,6 +36,8 @@ class ParamReader {
   int integer(const std::string& name, int fallback, int lo, int hi);
   // The parameter as a boolean (true/false), or `fallback` when absent.
   bool flag(const std::string& name, bool fallback);
+  // The parameter as one of `allowed` (a word, e.g. polarity), or `fallback` when absent.
+  std::string word(const std::string& name, const std::string& fallback, const std::vector<std::string>& allowed);
 
   // The first error met, or an error naming a parameter nobody asked for (a typo in job.yaml).
   Result<void> finish() const;
