@@ -21,3 +21,8 @@ pkg_check_modules(MOSQUITTO REQUIRED IMPORTED_TARGET libmosquitto)
 add_library(vgr_opencv INTERFACE)
 target_include_directories(vgr_opencv SYSTEM INTERFACE ${OpenCV_INCLUDE_DIRS})
 target_link_libraries(vgr_opencv INTERFACE opencv_core opencv_imgproc opencv_imgcodecs opencv_features2d opencv_flann opencv_calib3d)
+# 3D (paper 004, docs/3d.md): Open3D 0.16 from Debian's libopen3d-dev, linked by vision/cloud/
+# alone (privately; its headers are in one translation unit there), and OpenMP to bound its
+# threads.
+find_package(Open3D REQUIRED CONFIG)
+find_package(OpenMP REQUIRED COMPONENTS CXX)

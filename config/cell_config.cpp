@@ -147,6 +147,33 @@ void readIpv4(Section& s, const std::string& key, std::string& out, const char* 
                        role, out));
 }
 
+// A list of numeric IP addresses (IPv4 only when v4Only): `key: [a, b]`; absent or null
+// leaves `out` empty.
+void readAddressList(Section& s, const std::string& key, std::vector<std::string>& out, bool v4Only) {
+  const YAML::Node list = s.get(key);
+  if (!list || list.IsNull()) return;
+  const char* what = v4Only ? "IPv4 addresses" : "IP addresses";
+  if (!list.IsSequence()) s.fail(list, key, fmt::format("expected a list of numeric {}", what));
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const std::string item = key + "[" + std::to_string(i) + "]";
+    const std::string text = list[i].IsScalar() ? list[i].Scalar() : std::string("<non-scalar>");
+    unsigned char buf[16];
+    const bool ok = list[i].IsScalar() && (::inet_pton(AF_INET, text.c_str(), buf) == 1 ||
+                                           (!v4Only && ::inet_pton(AF_INET6, text.c_str(), buf) == 1));
+    if (!ok) s.fail(list[i], item, fmt::format("expected a numeric {} address, got '{}'", v4Only ? "IPv4" : "IP", text));
+    out.push_back(text);
+  }
+}
+
+// max_clients_per_address: [1, max_clients]; absent = min(kDefaultMaxClientsPerAddress, max_clients).
+void readPerAddress(Section& s, int maxClients, int& out) {
+  out = std::min(kDefaultMaxClientsPerAddress, maxClients);
+  s.read<int>("max_clients_per_address", out, inRange(1, 64), "[1, 64]");
+  if (out > maxClients)
+    s.fail(s.get("max_clients_per_address"), "max_clients_per_address",
+           fmt::format("{} is more than max_clients ({})", out, maxClients));
+}
+
 void parseModbus(Section s, ModbusConfig& m) {
   s.read<bool>("enabled", m.enabled);
   readIpv4(s, "bind", m.bind, "the Modbus server binds IPv4 addresses, it resolves no names");
@@ -158,19 +185,10 @@ void parseModbus(Section s, ModbusConfig& m) {
                       "one of: high_word_first, low_word_first");
   m.floatWordOrder = order == "high_word_first" ? WordOrder::HighWordFirst : WordOrder::LowWordFirst;
   s.read<int>("max_clients", m.maxClients, inRange(1, 64), "[1, 64]");
+  readPerAddress(s, m.maxClients, m.maxClientsPerAddress);
   s.read<int>("idle_timeout_ms", m.idleTimeoutMs, inRange(0, 86400000), "[0, 86400000]");
-  const YAML::Node allowed = s.get("allowed_clients");
-  if (allowed && !allowed.IsNull()) {
-    if (!allowed.IsSequence()) s.fail(allowed, "allowed_clients", "expected a list of IPv4 addresses");
-    for (std::size_t i = 0; i < allowed.size(); ++i) {
-      const std::string key = "allowed_clients[" + std::to_string(i) + "]";
-      const std::string text = allowed[i].IsScalar() ? allowed[i].Scalar() : std::string("<non-scalar>");
-      unsigned char buf[4];
-      if (!allowed[i].IsScalar() || ::inet_pton(AF_INET, text.c_str(), buf) != 1)
-        s.fail(allowed[i], key, "expected a numeric IPv4 address, got '" + text + "'");
-      m.allowedClients.push_back(text);
-    }
-  }
+  readAddressList(s, "allowed_clients", m.allowedClients, true);
+  readAddressList(s, "control_clients", m.controlClients, true);
   s.read<bool>("require_trigger_enable", m.requireTriggerEnable);
 
   Section c(s.file(), s.get("client"), s.join("client"));
@@ -264,19 +282,11 @@ void parseRobot(Section s, RobotConfig& r) {
   s.read<int>("reply_deadline_ms", r.replyDeadlineMs, inRange(50, 60000), "[50, 60000]");
   s.read<int>("job", r.job, inRange(1, 32767), "[1, 32767]");
   s.read<int>("max_clients", r.maxClients, inRange(1, 64), "[1, 64]");
+  readPerAddress(s, r.maxClients, r.maxClientsPerAddress);
+  s.read<int>("stale_after_ms", r.staleAfterMs, inRange(100, 86400000), "[100, 86400000]");
   s.read<int>("idle_timeout_ms", r.idleTimeoutMs, inRange(0, 86400000), "[0, 86400000]");
-
-  const YAML::Node allowed = s.get("allowed_clients");
-  if (allowed && !allowed.IsNull()) {
-    if (!allowed.IsSequence()) s.fail(allowed, "allowed_clients", "expected a list of IP addresses");
-    for (std::size_t i = 0; i < allowed.size(); ++i) {
-      const std::string key = "allowed_clients[" + std::to_string(i) + "]";
-      const std::string text = allowed[i].IsScalar() ? allowed[i].Scalar() : std::string("<non-scalar>");
-      if (!allowed[i].IsScalar() || !validIpAddress(text))
-        s.fail(allowed[i], key, "expected a numeric IP address, got '" + text + "'");
-      r.allowedClients.push_back(text);
-    }
-  }
+  readAddressList(s, "allowed_clients", r.allowedClients, false);
+  readAddressList(s, "control_clients", r.controlClients, false);
 
   std::string order = "best_score";
   s.read<std::string>("part_order", order, oneOf({"best_score", "by_label", "label_only", "random"}),
@@ -539,6 +549,9 @@ CellConfig parse(const YAML::Node& root, const std::string& file) {
   Section cell(file, top.get("cell"), "cell");
   cell.read<std::string>("name", c.name);
   cell.read<std::string>("journal", c.journalPath);
+  cell.read<long long>("journal_max_bytes", c.journalMaxBytes, inRange<long long>(65536, 1LL << 40), "[65536, 2^40]");
+  cell.read<int>("journal_files", c.journalFiles, inRange(1, 1000), "[1, 1000]");
+  cell.read<int>("journal_sync_ms", c.journalSyncMs, inRange(-1, 3600000), "[-1, 3600000] (0: every record, -1: never)");
   cell.read<std::string>("log_level", c.logLevel,
                          oneOf({"trace", "debug", "info", "warn", "error", "critical", "off"}),
                          "one of: trace, debug, info, warn, error, critical, off");

@@ -99,14 +99,23 @@ struct ModbusClientConfig {
   int reconnectMs = 500;                        // ms, [10, 60000]: pause before reconnecting
 };
 
+// Connections one peer address may hold on a Modbus or robot port unless the config says
+// (`max_clients_per_address`), capped at the port's max_clients: one host cannot take every
+// slot (docs/protocols.md, "Connections").
+inline constexpr int kDefaultMaxClientsPerAddress = 4;
+
 struct ModbusConfig {
   bool enabled = true;
   std::string bind = "127.0.0.1";
   std::uint16_t port = 1502;
   WordOrder floatWordOrder = WordOrder::HighWordFirst;
   int maxClients = 8;                 // [1, 64]: PLC connections served at once
+  int maxClientsPerAddress = kDefaultMaxClientsPerAddress;  // [1, maxClients]: from one address
   int idleTimeoutMs = 60000;          // ms, [0, 86400000]: a silent PLC connection is closed; 0 = never
   std::vector<std::string> allowedClients;  // numeric IPv4 addresses; empty = anyone
+  // Numeric IPv4 addresses whose register writes (trigger, job, clear error) are served;
+  // empty = every allowed client. Others may read; their writes get exception 02.
+  std::vector<std::string> controlClients;
   bool requireTriggerEnable = false;  // true: triggers count only while CONTROL b3 is set
   ModbusClientConfig client;          // modbus.client
 };
@@ -134,8 +143,12 @@ struct RobotConfig {
   int job = 0;                 // [1, 32767], a job id of the cell; 0 = the cell's first job.
                                // What "GET" without a number (and the strict push) serves
                                // until the robot sends "JOB,<n>".
-  int maxClients = 8;          // [1, 64]: a new connection from the same address replaces the oldest when full
+  int maxClients = 8;          // [1, 64]: connections at once
+  int maxClientsPerAddress = kDefaultMaxClientsPerAddress;  // [1, maxClients]: from one address
+  int staleAfterMs = 10000;    // ms, [100, 86400000]: when full, a connection idle this long with
+                               // nothing in progress may be replaced by its address's newcomer
   std::vector<std::string> allowedClients;  // numeric IP addresses; empty = anyone
+  std::vector<std::string> controlClients;  // numeric IP addresses that may send JOB/TRIG; empty = anyone
   int idleTimeoutMs = 0;       // ms, [0, 86400000]: a connection without a request is closed; 0 = never
   PartOrder partOrder = PartOrder::BestScore;
   int label = 0;               // [0, 32767]: the one label served with part_order label_only
@@ -297,6 +310,9 @@ struct CellConfig {
   std::string sourcePath;           // file it was loaded from
   std::string name = "cell";
   std::string journalPath = "/var/lib/vgr/journal.jsonl";
+  long long journalMaxBytes = 100LL << 20;  // bytes, [65536, 2^40]: the journal rotates at this size
+  int journalFiles = 9;             // [1, 1000]: rotated journals kept (journal.1 .. journal.N)
+  int journalSyncMs = 1000;         // ms, [-1, 3600000]: fdatasync at most this often; 0 = every record, -1 = never
   std::string logLevel = "info";
   int cycleDeadlineMs = 1500;       // ms, [kMinCycleDeadlineMs = 250, 60000]: trigger -> result, always answered
   CameraConfig camera;

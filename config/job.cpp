@@ -98,6 +98,11 @@ JobFile parse(const YAML::Node& root, const std::string& file, const std::string
   j.folder = folder;
   const int version = top.integer("version", 1, 1, 1);
   (void)version;
+  // `kind: 3d` jobs are read by config/job3d.hpp (and located by vision/cloud/).
+  if (const std::string kind = top.text("kind", "2d"); kind == "3d")
+    top.fail(top.get("kind"), "kind", "a 3D job: this reader is for 2D jobs (3D jobs: docs/3d.md)");
+  else if (kind != "2d")
+    top.fail(top.get("kind"), "kind", "expected 2d or 3d, got '" + kind + "'");
   j.name = top.text("name", "");
   j.method = top.text("method", j.method);
   if (j.method.empty()) top.fail(top.get("method"), "method", "must not be empty");
@@ -136,6 +141,9 @@ JobFile parse(const YAML::Node& root, const std::string& file, const std::string
   j.taught.angleMinDeg = top.number("angle_min_deg", j.taught.angleMinDeg, -180, 180);
   j.taught.angleMaxDeg = top.number("angle_max_deg", j.taught.angleMaxDeg, -180, 180);
   if (j.taught.angleMaxDeg < j.taught.angleMinDeg) top.fail(top.get("angle_max_deg"), "angle_max_deg", "must not be below angle_min_deg");
+  j.taught.scaleMin = top.number("scale_min", j.taught.scaleMin, kMinPartScale, kMaxPartScale);
+  j.taught.scaleMax = top.number("scale_max", j.taught.scaleMax, kMinPartScale, kMaxPartScale);
+  if (j.taught.scaleMax < j.taught.scaleMin) top.fail(top.get("scale_max"), "scale_max", "must not be below scale_min");
   j.partHeightMm = top.number("part_height_mm", 0, 0, 1000);
 
   j.referenceGiven = top.has("reference");
@@ -251,6 +259,9 @@ std::string jobYaml(const JobFile& j) {
   y << YAML::Key << "max_parts" << YAML::Value << j.taught.maxParts << YAML::Comment("[1, 64]");
   y << YAML::Key << "angle_min_deg" << YAML::Value << numberText(j.taught.angleMinDeg);
   y << YAML::Key << "angle_max_deg" << YAML::Value << numberText(j.taught.angleMaxDeg);
+  y << YAML::Key << "scale_min" << YAML::Value << numberText(j.taught.scaleMin);
+  y << YAML::Key << "scale_max" << YAML::Value << numberText(j.taught.scaleMax)
+    << YAML::Comment("image px per template px; a part seen larger is nearer the camera");
   y << YAML::Key << "part_height_mm" << YAML::Value << numberText(j.partHeightMm)
     << YAML::Comment("grasp height above the conveyor plane");
   y << YAML::Key << "reference" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "x_mm" << YAML::Value

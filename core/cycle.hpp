@@ -28,6 +28,7 @@ struct PartResult {
   double uPx = 0;     // grasp point in the image, pixels (x right, y down, pixel centres at integers)
   double vPx = 0;
   double angleImgDeg = 0;  // part rotation in the image, degrees, counter-clockwise as displayed
+  double scale = 1;        // image px per template px (a part seen larger is nearer the camera: pose.z says how high)
   double score = 0;        // 0..1
   int label = 0;           // part class (paper 002's labels); 0 when the method does not classify
   double confidence = 0;   // [0, 1]: the classifier's confidence in `label`; 0 without a classifier

@@ -8,10 +8,12 @@ namespace vgr {
 
 // Pinhole intrinsics of a depth image, px: x right, y down, pixel centres at integers, so a
 // pixel (u, v) with depth z mm is the camera-frame point ((u - cx) z / fx, (v - cy) z / fy, z)
-// (x right, y down, z forward).
+// (x right, y down, z forward). One type for the drivers, the data sets, the calibration and
+// vision/cloud's locator (which checks width/height against the image it is given).
 struct DepthIntrinsics {
-  double fx = 0, fy = 0;  // px, > 0
-  double cx = 0, cy = 0;  // px
+  double fx = 0, fy = 0;      // px, > 0
+  double cx = 0, cy = 0;      // px
+  int width = 0, height = 0;  // px, the image size they belong to; 0 = not stated
 };
 
 }  // namespace vgr

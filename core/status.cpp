@@ -17,6 +17,7 @@ std::string_view statusName(Status s) {
     case Status::JobNotFound: return "JOB_NOT_FOUND";
     case Status::Internal: return "INTERNAL";
     case Status::OffsetOutOfLimits: return "OFFSET_OUT_OF_LIMITS";
+    case Status::NotPermitted: return "NOT_PERMITTED";
   }
   return "INTERNAL";
 }

@@ -20,6 +20,7 @@ enum class Status : std::int16_t {
   JobNotFound = -7,
   Internal = -8,
   OffsetOutOfLimits = -9,
+  NotPermitted = -10,  // a control request (robot JOB/TRIG) from an address not in control_clients
 };
 
 // Upper-case name as in the table ("CAMERA_ERROR").

@@ -40,12 +40,20 @@ struct ParamSource {
   int line = 0;
 };
 
+// The scale range a job may search (TaughtTemplate::scaleMin/scaleMax), image px per template px.
+inline constexpr double kMinPartScale = 0.2, kMaxPartScale = 5.0;
+
 struct TaughtTemplate {
   PixelPoint grasp;                     // grasp point, template px
   PixelRect searchRoi;                  // where to search in live images; empty = whole image
   double minScore = 0.5;                // [0, 1]: weaker candidates are not parts
   int maxParts = 1;                     // [1, 64]: at most this many parts per image
   double angleMinDeg = -180, angleMaxDeg = 180;  // search range relative to the template
+  // Scale range relative to the template (image px per template px), within
+  // [kMinPartScale, kMaxPartScale], min <= max;
+  // 1/1 = parts are seen as large as taught. A part seen larger is nearer the camera
+  // (vision/part_poses.hpp maps it so); methods that search a range report each part's scale.
+  double scaleMin = 1, scaleMax = 1;
   std::vector<TemplateRegion> regions;  // empty = the method splits its own (paper 000)
   // Method parameters from job.yaml, by name, as written there (the method parses and
   // range-checks them; an unknown name is an error naming it).

@@ -41,6 +41,26 @@ std::uint32_t lastCycleIn(const std::string& tail) {
   return 0;
 }
 
+// The cycle id of the last complete line of the file at `path` (0: none, or unreadable).
+std::uint32_t lastCycleOfFile(const std::string& path) {
+  std::error_code ec;
+  const std::uintmax_t size = fs::file_size(path, ec);
+  if (ec || size == 0) return 0;
+  const std::uintmax_t from = size > kTailBytes ? size - kTailBytes : 0;
+  std::string tail(static_cast<std::size_t>(size - from), '\0');
+  std::ifstream in(path, std::ios::binary);
+  in.seekg(static_cast<std::streamoff>(from));
+  in.read(tail.data(), static_cast<std::streamsize>(tail.size()));
+  if (!in) return 0;
+  tail.resize(tail.rfind('\n') == std::string::npos ? 0 : tail.rfind('\n') + 1);
+  return lastCycleIn(tail);
+}
+
+std::uint64_t microsSince(std::chrono::steady_clock::time_point t0) {
+  return static_cast<std::uint64_t>(
+      std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - t0).count());
+}
+
 }  // namespace
 
 std::vector<JournalRobot> journalRobots(const config::CellConfig& cell) {
@@ -52,10 +72,15 @@ std::vector<JournalRobot> journalRobots(const config::CellConfig& cell) {
 }
 
 Journal::~Journal() {
-  if (fd_ >= 0) ::close(fd_);
+  if (fd_ < 0) return;
+  if (options_.syncMs >= 0) ::fdatasync(fd_);
+  ::close(fd_);
 }
 
-Result<void> Journal::open(const std::string& path) {
+Result<void> Journal::open(const std::string& path, JournalOptions options) {
+  if (options.maxBytes < (64u << 10) || options.keepFiles < 1 || options.keepFiles > 1000 || options.syncMs < -1)
+    return fail(Status::BadArgument, "journal " + path + ": options out of range");
+  options_ = options;
   std::error_code ec;
   const auto parent = fs::path(path).parent_path();
   if (!parent.empty()) fs::create_directories(parent, ec);
@@ -88,9 +113,50 @@ Result<void> Journal::open(const std::string& path) {
     }
     lastCycleId_ = lastCycleIn(tail);
   }
+  // Just rotated (or cut to nothing): the last record is in the newest rotated file.
+  if (lastCycleId_ == 0) lastCycleId_ = lastCycleOfFile(path + ".1");
   fd_ = ::open(path.c_str(), O_WRONLY | O_APPEND | O_CREAT | O_CLOEXEC, 0644);
   if (fd_ < 0) return fail(Status::BadArgument, "journal " + path + ": " + std::strerror(errno));
+  const auto size = fs::file_size(path, ec);
+  size_ = ec ? 0 : static_cast<std::uint64_t>(size);
+  lastSync_ = std::chrono::steady_clock::now();
   return {};
+}
+
+JournalStats Journal::stats() const {
+  return {records_.load(), writeMicros_.load(), syncs_.load(), syncMicros_.load(), rotations_.load()};
+}
+
+void Journal::rotate() {
+  // Everything written so far reaches the disk before the file changes name.
+  if (options_.syncMs >= 0) ::fdatasync(fd_);
+  ::close(fd_);
+  fd_ = -1;
+  std::error_code ec;
+  const auto numbered = [&](int i) { return path_ + "." + std::to_string(i); };
+  fs::remove(numbered(options_.keepFiles), ec);
+  for (int i = options_.keepFiles - 1; i >= 1; --i) {
+    if (fs::exists(numbered(i), ec)) fs::rename(numbered(i), numbered(i + 1), ec);
+  }
+  fs::rename(path_, numbered(1), ec);
+  const bool renamed = !ec;
+  if (!renamed)
+    log::error("journal", "{}: cannot rotate it to {}: {}; appending on (next try after another {} bytes)", path_,
+               numbered(1), ec.message(), options_.maxBytes);
+  fd_ = ::open(path_.c_str(), O_WRONLY | O_APPEND | O_CREAT | O_CLOEXEC, 0644);
+  if (fd_ < 0) {
+    log::error("journal", "{}: cannot open it after rotating: {}", path_, std::strerror(errno));
+    return;
+  }
+  if (!renamed) {
+    size_ = 0;
+    return;
+  }
+  const auto size = fs::file_size(path_, ec);
+  size_ = ec ? 0 : static_cast<std::uint64_t>(size);
+  ++rotations_;
+  log::info("journal", "{}: reached {} bytes, rotated to {} (keeping {} files)", path_, options_.maxBytes, numbered(1),
+            options_.keepFiles);
 }
 
 namespace {
@@ -108,7 +174,8 @@ nlohmann::json partJson(const PartResult& p) {
           {"dx_mm", round3(p.offset.x)}, {"dy_mm", round3(p.offset.y)}, {"dz_mm", round3(p.offset.z)},
           {"drz_deg", round3(o.rz)},    {"dry_deg", round3(o.ry)},      {"drx_deg", round3(o.rx)},
           {"u_px", round3(p.uPx)},      {"v_px", round3(p.vPx)},        {"angle_img_deg", round3(p.angleImgDeg)},
-          {"score", round3(p.score)},   {"label", p.label},             {"confidence", round3(p.confidence)}};
+          {"scale", std::round(p.scale * 1e5) / 1e5}, {"score", round3(p.score)}, {"label", p.label},
+          {"confidence", round3(p.confidence)}};
 }
 
 }  // namespace
@@ -170,11 +237,24 @@ std::string Journal::toJson(const CycleResult& r, const std::vector<JournalRobot
 void Journal::append(const CycleResult& r) {
   if (fd_ < 0) return;
   const std::string line = toJson(r, robots_) + "\n";
+  const auto t0 = std::chrono::steady_clock::now();
   const auto n = ::write(fd_, line.data(), line.size());
+  writeMicros_ += microsSince(t0);
+  if (n > 0) size_ += static_cast<std::uint64_t>(n);
   if (n == std::ssize(line)) {
+    ++records_;
     lastCycleId_ = r.cycleId;
     if (burst_ > 0) log::info("journal", "{}: writing again after {} records could not be written", path_, burst_);
     burst_ = 0;
+    const auto now = std::chrono::steady_clock::now();
+    if (options_.syncMs >= 0 && now - lastSync_ >= std::chrono::milliseconds(options_.syncMs)) {
+      ::fdatasync(fd_);
+      lastSync_ = std::chrono::steady_clock::now();
+      syncMicros_ += static_cast<std::uint64_t>(
+          std::chrono::duration_cast<std::chrono::microseconds>(lastSync_ - now).count());
+      ++syncs_;
+    }
+    if (size_ >= options_.maxBytes) rotate();
     return;
   }
   const int err = n < 0 ? errno : ENOSPC;

@@ -22,8 +22,10 @@ std::vector<std::unique_ptr<protocol::PlcLink>> makePlcLinks(const config::CellC
     o.port = m.port;
     o.floatOrder = m.floatWordOrder;
     o.maxClients = m.maxClients;
+    o.maxClientsPerAddress = m.maxClientsPerAddress;
     o.idleTimeout = std::chrono::milliseconds(m.idleTimeoutMs);
     o.allowedClients = m.allowedClients;
+    o.controlClients = m.controlClients;
     o.requireTriggerEnable = m.requireTriggerEnable;
     o.resultDeadline = backstop;
     links.push_back(std::make_unique<protocol::ModbusServer>(o, onTrigger));

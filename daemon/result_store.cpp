@@ -166,26 +166,29 @@ void ResultStore::onCycleStarted(std::uint32_t cycleId, int /*jobId*/) { running
 void ResultStore::onResult(const CycleResult& r) {
   if (running_ == r.cycleId) running_.reset();
   latest_[r.jobId] = r;
-  // A result wakes every request waiting for its job, oldest first: each takes its robot's
-  // next part; when one robot has more waiting connections than parts, the extra ones get
-  // the robot's last part again (a waiting request is never left to time out while a
-  // result it asked for exists).
-  for (auto it = waiters_.begin(); it != waiters_.end();) {
-    Waiter& w = *it->second;
-    if (w.job != r.jobId || w.done || (w.cycle != 0 && w.cycle != r.cycleId)) {
-      ++it;
-      continue;
+  // A result wakes the requests waiting for its job, oldest first, those that asked for
+  // exactly this cycle (TRIG) before the others: each takes its robot's next part. A part
+  // goes to ONE connection of a robot (docs/protocols.md): when a robot has more waiting
+  // connections than the result has parts, the extra ones go on waiting (for the next
+  // result, or their deadline's 2/3), they do not get the same part again.
+  for (const bool exact : {true, false}) {
+    for (auto it = waiters_.begin(); it != waiters_.end();) {
+      Waiter& w = *it->second;
+      if (w.job != r.jobId || w.done || (w.cycle != 0 && w.cycle != r.cycleId) || (w.cycle != 0) != exact) {
+        ++it;
+        continue;
+      }
+      bool served = false;
+      serveNext(w.robot, w.job, [&](const protocol::RobotReply& reply, protocol::WrittenFn written) {
+        served = true;
+        answer(w, reply, std::move(written));
+      });
+      if (!served) {
+        ++it;
+        continue;
+      }
+      it = waiters_.erase(it);
     }
-    bool served = false;
-    serveNext(w.robot, w.job, [&](const protocol::RobotReply& reply, protocol::WrittenFn written) {
-      served = true;
-      answer(w, reply, std::move(written));
-    });
-    if (!served) {
-      const Progress& p = state(w.robot).progress[w.job];
-      if (p.last) answer(w, *p.last);
-    }
-    it = waiters_.erase(it);
   }
 }
 

@@ -9,9 +9,10 @@
 //    job arrived meanwhile: the robot then goes on with the newest).
 //  - When nothing undelivered exists the request waits for the next result of that job,
 //    up to the robot's reply deadline, then gets 2 RESULT_NOT_READY (a cycle is running) or
-//    3 NO_NEW_TRIGGER (nothing triggered). A result answers every request waiting for it:
-//    when one robot has more waiting connections than parts, the extra ones get its last
-//    part again.
+//    3 NO_NEW_TRIGGER (nothing triggered). A result answers the requests waiting for it,
+//    oldest first, each with its robot's next part; a part goes to one connection of a
+//    robot only: when a robot has more waiting connections than parts, the extra ones go
+//    on waiting (next result or deadline), they never get a part another connection got.
 //  - A result without parts (or none with the robot's label) is delivered once as
 //    1 NO_PART_FOUND; an error result once with its status (-9 OFFSET_OUT_OF_LIMITS when
 //    every part found was outside the job's limits: those parts are never served).

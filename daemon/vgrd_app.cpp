@@ -157,6 +157,22 @@ struct VgrdApp::Impl {
               "{} abandoned; packets missing {}, resent {}; underruns {}; trigger overruns {}; journal write errors {}",
               c.completed, c.failed, c.timeouts, c.incomplete, c.retries, c.recovered, c.reconnects, c.abandoned,
               c.missingPackets, c.resentPackets, c.underruns, cycles->overruns(), journal.writeErrors());
+    const JournalStats j = journal.stats();
+    log::info("main", "journal: {} records ({:.1f} µs per write), {} syncs ({:.1f} µs each), {} rotations", j.records,
+              j.records ? static_cast<double>(j.writeMicros) / static_cast<double>(j.records) : 0.0, j.syncs,
+              j.syncs ? static_cast<double>(j.syncMicros) / static_cast<double>(j.syncs) : 0.0, j.rotations);
+    // Connection counters (the connection log lines themselves are rate-limited).
+    for (const auto& robot : robots) {
+      const protocol::RobotServerStats st = robot->stats();
+      log::info("main",
+                "robot '{}': connections {} accepted, {} closed, {} open; refused {} not allowed, {} full, {} over the "
+                "rate; {} stale replaced, {} reset before accept; {} control requests refused; {} log lines held back",
+                robot->endpoint().name, st.accepted, st.closed, robot->clientCount(), st.refusedNotAllowed,
+                st.refusedFull, st.refusedRate, st.replacedStale, st.goneBeforeAccept, st.controlRefused, st.logLinesHeldBack);
+    }
+    for (const auto& plc : plcs) {
+      if (const std::string line = plc->summary(); !line.empty()) log::info("main", "{}", line);
+    }
     if (archive) {
       const ArchiveCounters a = archive->counters();
       log::info("main", "archive: {} frames ({:.1f} of {:.1f} MB), {} written, {} dropped (queue full), {} deleted (quota), "
@@ -183,7 +199,11 @@ VgrdApp::~VgrdApp() {
 
 Result<void> VgrdApp::start() {
   Impl& s = *impl_;
-  if (auto r = s.journal.open(s.cfg.journalPath); !r) return r;
+  JournalOptions journalOptions;
+  journalOptions.maxBytes = static_cast<std::uint64_t>(s.cfg.journalMaxBytes);
+  journalOptions.keepFiles = s.cfg.journalFiles;
+  journalOptions.syncMs = s.cfg.journalSyncMs;
+  if (auto r = s.journal.open(s.cfg.journalPath, journalOptions); !r) return r;
   s.journal.setRobots(journalRobots(s.cfg));
 
   auto cam = drivers::makeCamera(s.cfg.camera);
@@ -228,7 +248,10 @@ Result<void> VgrdApp::start() {
     ep.bind = rc.bind;
     ep.port = rc.port;
     ep.maxClients = static_cast<std::size_t>(rc.maxClients);
+    ep.maxClientsPerAddress = static_cast<std::size_t>(rc.maxClientsPerAddress);
+    ep.staleAfterMs = rc.staleAfterMs;
     ep.allowedClients = rc.allowedClients;
+    ep.controlClients = rc.controlClients;
     ep.idleTimeoutMs = rc.idleTimeoutMs;
     ep.abbRotation = rc.abbRotation;
     ep.strict.command = rc.strict.command;

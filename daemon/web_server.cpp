@@ -21,6 +21,7 @@
 #include <boost/beast/websocket.hpp>
 
 #include "core/log.hpp"
+#include "core/token_bucket.hpp"
 
 namespace vgr::daemon {
 
@@ -35,6 +36,23 @@ namespace {
 constexpr std::size_t kHeaderLimitBytes = 8 * 1024;
 constexpr auto kIoTimeout = std::chrono::seconds(10);
 constexpr std::size_t kMaxConnections = 32;
+// One peer address may hold at most this many of them: a connection storm or a slowloris
+// from one host leaves the rest to everyone else (issue 19).
+constexpr std::size_t kMaxConnectionsPerAddress = 8;
+// And what one peer can make the I/O thread do is bounded: sessions from one address at
+// most 200 a second (more are closed as soon as they are accepted), requests of one
+// connection at most 2000 a second (more wait in its socket). The listen backlog itself is
+// drained at up to 5000 accepts a second (an accept and a close cost a few microseconds):
+// whatever waits there waits for everyone, so a storm's leftovers must not stay in it. At
+// 200 accepts a second, the ~3400 connections a one-thread storm left there took 17 s to
+// drain, and every new client, from any address, waited behind them (input_attacks_test).
+constexpr double kAcceptsPerSecond = 5000, kAcceptBurst = 500;
+constexpr double kSessionsPerSecondPerAddress = 200, kSessionBurstPerAddress = 50;
+// Session budgets are kept for this many recently seen addresses; a budget unused for
+// kPeerBudgetIdle is full again and may be forgotten. Beyond that, addresses share one.
+constexpr std::size_t kMaxPeerBudgets = 256;
+constexpr auto kPeerBudgetIdle = std::chrono::seconds(1);
+constexpr double kRequestsPerSecond = 2000, kRequestBurst = 200;
 constexpr std::size_t kMaxWebSockets = 16;
 constexpr std::size_t kWsQueue = 64;
 constexpr std::size_t kWsReadLimit = 1024;
@@ -88,12 +106,22 @@ struct WebServer::Impl : std::enable_shared_from_this<WebServer::Impl> {
   tcp::acceptor acceptor;
   asio::steady_timer retry;
   std::set<Session*> sessions;  // I/O thread only
+  std::map<asio::ip::address, std::size_t> perAddress;  // open sessions by peer address, I/O thread
+  TokenBucket acceptBudget{kAcceptsPerSecond, kAcceptBurst};
+  struct PeerBudget {
+    TokenBucket sessions{kSessionsPerSecondPerAddress, kSessionBurstPerAddress};
+    TokenBucket::Clock::time_point lastUsed{};
+  };
+  std::map<asio::ip::address, PeerBudget> peerBudgets;  // I/O thread, at most kMaxPeerBudgets
+  PeerBudget sharedBudget;                              // addresses beyond those
   std::set<std::shared_ptr<WsSession>> wsSessions;  // I/O thread only
   std::atomic<std::uint64_t> wsClients{0}, wsAccepted{0}, wsDropped{0};
   bool stopped = false;
   std::uint16_t boundPort = 0;
 
   void doAccept();
+  // One more session from `peer` within its budget (kSessionsPerSecondPerAddress).
+  bool takeSession(const asio::ip::address& peer);
 };
 
 class WebServer::Impl::WsSession : public std::enable_shared_from_this<WsSession> {
@@ -189,10 +217,12 @@ class WebServer::Impl::WsSession : public std::enable_shared_from_this<WsSession
 
 class WebServer::Impl::Session : public std::enable_shared_from_this<Session> {
  public:
-  Session(std::shared_ptr<Impl> server, tcp::socket socket) : server_(std::move(server)), stream_(std::move(socket)) {}
+  Session(std::shared_ptr<Impl> server, tcp::socket socket, asio::ip::address peer)
+      : server_(std::move(server)), stream_(std::move(socket)), peer_(std::move(peer)), pace_(stream_.get_executor()) {}
 
   void start() {
     server_->sessions.insert(this);
+    ++server_->perAddress[peer_];
     remote_ = remoteAddress(stream_.socket());
     doRead();
   }
@@ -219,6 +249,13 @@ class WebServer::Impl::Session : public std::enable_shared_from_this<Session> {
 
  private:
   void doRead() {
+    if (!budget_.take()) {  // over the connection's request rate: read on when a token comes
+      pace_.expires_at(budget_.nextToken());
+      pace_.async_wait([self = shared_from_this()](const error_code& ec) {
+        if (!ec) self->doRead();
+      });
+      return;
+    }
     parser_.emplace();
     parser_->header_limit(kHeaderLimitBytes);
     parser_->body_limit(0);
@@ -251,7 +288,7 @@ class WebServer::Impl::Session : public std::enable_shared_from_this<Session> {
       if (server_->wsSessions.size() >= kMaxWebSockets)
         return write({503, kTextType, "too many WebSocket clients\n", {}}, version, false, false);
       // The connection becomes a WebSocket: this HTTP session ends here.
-      server_->sessions.erase(this);
+      releaseSlot();
       auto ws = std::make_shared<WsSession>(server_, std::move(stream_));
       ws->start(parser_->release());
       return;
@@ -299,11 +336,21 @@ class WebServer::Impl::Session : public std::enable_shared_from_this<Session> {
 
   void finish() {
     close();
-    server_->sessions.erase(this);
+    releaseSlot();
+  }
+
+  // Leaves the HTTP session table and the peer's per-address count (once).
+  void releaseSlot() {
+    if (server_->sessions.erase(this) == 0) return;
+    if (auto it = server_->perAddress.find(peer_); it != server_->perAddress.end() && --it->second == 0)
+      server_->perAddress.erase(it);
   }
 
   std::shared_ptr<Impl> server_;
   beast::tcp_stream stream_;
+  asio::ip::address peer_;
+  asio::steady_timer pace_;
+  TokenBucket budget_{kRequestsPerSecond, kRequestBurst};
   beast::flat_buffer buffer_{kHeaderLimitBytes};
   std::optional<http::request_parser<http::empty_body>> parser_;
   std::string remote_;
@@ -322,14 +369,39 @@ void WebServer::Impl::doAccept() {
       });
       return;
     }
-    if (self->sessions.size() >= kMaxConnections) {
+    error_code peerEc;
+    const asio::ip::address peer = socket.remote_endpoint(peerEc).address();
+    const auto fromPeer = self->perAddress.find(peer);
+    if (peerEc || self->sessions.size() >= kMaxConnections ||
+        (fromPeer != self->perAddress.end() && fromPeer->second >= kMaxConnectionsPerAddress) ||
+        !self->takeSession(peer)) {
       error_code ignored;
-      socket.close(ignored);  // over the limit: refuse this one, keep serving the others
+      socket.close(ignored);  // gone already, or over a limit or its rate: refuse this one, serve the others
     } else {
-      std::make_shared<Session>(self, std::move(socket))->start();
+      std::make_shared<Session>(self, std::move(socket), peer)->start();
     }
-    self->doAccept();
+    if (self->acceptBudget.take()) {
+      self->doAccept();
+      return;
+    }
+    self->retry.expires_at(self->acceptBudget.nextToken());
+    self->retry.async_wait([self](const error_code& rec) {
+      if (!rec) self->doAccept();
+    });
   });
+}
+
+bool WebServer::Impl::takeSession(const asio::ip::address& peer) {
+  const auto now = TokenBucket::Clock::now();
+  auto it = peerBudgets.find(peer);
+  if (it == peerBudgets.end()) {
+    if (peerBudgets.size() >= kMaxPeerBudgets)
+      std::erase_if(peerBudgets, [now](const auto& kv) { return now - kv.second.lastUsed > kPeerBudgetIdle; });
+    if (peerBudgets.size() < kMaxPeerBudgets) it = peerBudgets.emplace(peer, PeerBudget{}).first;
+  }
+  PeerBudget& b = it == peerBudgets.end() ? sharedBudget : it->second;
+  b.lastUsed = now;
+  return b.sessions.take(now);
 }
 
 WebServer::WebServer(asio::io_context& io, WebOptions options) : impl_(std::make_shared<Impl>(io, std::move(options))) {}

@@ -9,8 +9,9 @@
 // (image encoding) goes to routeAsync(), whose handler hands a `respond` callback to
 // another thread. broadcast() on the I/O thread; websocketClients() from any thread.
 // Limits (Beast's server shape, STYLE.md rule 9): request head <= 8 KiB, no request body
-// accepted, 10 s to read a request and to write a reply, at most 32 HTTP connections and
-// 16 WebSocket clients at once; keep-alive honoured. GET and HEAD on route()/routeAsync()
+// accepted, 10 s to read a request and to write a reply, at most 32 HTTP connections (8 from one
+// peer address; new sessions 200/s per address, over it closed at once; requests 2000/s per connection) and 16 WebSocket clients
+// at once; keep-alive honoured. GET and HEAD on route()/routeAsync()
 // paths, POST only on routePost() paths: another method gets 405 (with Allow), an unknown
 // path 404. A WebSocket client only listens: messages it sends are read and dropped (1 KiB
 // each at most); each client has a queue of 64 messages, beyond which its oldest waiting

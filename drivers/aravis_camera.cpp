@@ -662,6 +662,8 @@ class AravisCamera final : public Camera {
     out.pixel = PixelType::DepthMm;
     out.bitDepth = 32;
     out.intrinsics = depth_.intrinsics;
+    out.intrinsics.width = out.width;
+    out.intrinsics.height = out.height;
     out.frameId = arv_buffer_get_frame_id(buf);
     out.deviceTimestampNs = arv_buffer_get_timestamp(buf);
     out.hostTimestampNs = arv_buffer_get_system_timestamp(buf);

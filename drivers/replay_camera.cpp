@@ -12,7 +12,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "config/depth_dataset_file.hpp"
+#include "config/depth_dataset.hpp"
 
 namespace vgr::drivers {
 namespace {
@@ -116,7 +116,7 @@ class ReplayCamera final : public Camera {
   }
 
  private:
-  // A 3D data-set folder (config/depth_dataset_file.hpp): camera.yaml and images/*.png.
+  // A 3D data-set folder (config/depth_dataset.hpp): camera.yaml and images/*.png.
   Result<void> openDepthSet() {
     auto cam = config::loadDepthCameraFile((fs::path(cfg_.replayFolder) / "camera.yaml").string());
     if (!cam) return fail(Status::CameraError, describe() + ": camera.replay.folder (a 3D data set for Coord3D_C16): " + cam.error().message);
@@ -142,7 +142,7 @@ class ReplayCamera final : public Camera {
     out.height = img.rows;
     out.pixel = PixelType::DepthMm;
     out.bitDepth = 32;
-    out.intrinsics = camera_.intrinsics;
+    out.intrinsics = camera_.intrinsics();
     out.data.resize(static_cast<std::size_t>(img.cols) * img.rows * sizeof(float));
     cv::Mat z(img.rows, img.cols, CV_32FC1, out.data.data());
     img.convertTo(z, CV_32F, camera_.depthScaleMm);  // 0 stays 0: no data

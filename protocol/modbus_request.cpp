@@ -151,7 +151,7 @@ int ModbusRequestHandler::receive(int fd, ModbusFrame& frame) {
 }
 
 ModbusRequestHandler::Outcome ModbusRequestHandler::handle(int fd, const ModbusFrame& frame, int length, ModbusMap& map,
-                                                           const ModbusMap::TriggerFn& onTrigger) {
+                                                           const ModbusMap::TriggerFn& onTrigger, bool mayWrite) {
   Outcome out;
   if (length <= 0 || static_cast<std::size_t>(length) > frame.size()) {
     out.keep = false;
@@ -159,6 +159,10 @@ ModbusRequestHandler::Outcome ModbusRequestHandler::handle(int fd, const ModbusF
     return out;
   }
   out.check = checkFrame(std::span<const std::uint8_t>(frame.data(), static_cast<std::size_t>(length)));
+  if (out.check.verdict == FrameVerdict::Serve && out.check.writes && !mayWrite) {
+    out.check.verdict = FrameVerdict::RejectAddress;  // read-only for this client
+    out.writeRefused = true;
+  }
   modbus_set_socket(ctx_->ctx, fd);
   switch (out.check.verdict) {
     case FrameVerdict::Drop:

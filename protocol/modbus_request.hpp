@@ -72,11 +72,14 @@ class ModbusRequestHandler {
     std::string dropReason;
     FrameCheck check;
     HandshakeEvents events;  // when check.writes and the request was served
+    bool writeRefused = false;  // a write from a client that may not write: exception 02
   };
   // Answers the first `length` bytes of `frame` (one complete ADU; libmodbus reads the
-  // whole buffer, never past it) on `fd` and runs the handshake after writes. The caller
-  // holds the map's lock.
-  Outcome handle(int fd, const ModbusFrame& frame, int length, ModbusMap& map, const ModbusMap::TriggerFn& onTrigger);
+  // whole buffer, never past it) on `fd` and runs the handshake after writes. A write of
+  // a client that may not write (mayWrite false: not in the server's control clients) is
+  // answered with exception 02 and changes nothing. The caller holds the map's lock.
+  Outcome handle(int fd, const ModbusFrame& frame, int length, ModbusMap& map, const ModbusMap::TriggerFn& onTrigger,
+                 bool mayWrite = true);
 
   const std::string& lastError() const { return lastError_; }
 

@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cerrno>
 #include <chrono>
 #include <cstring>
@@ -23,6 +24,8 @@
 #include <vector>
 
 #include "core/log.hpp"
+#include "core/log_limiter.hpp"
+#include "core/token_bucket.hpp"
 #include "protocol/modbus_request.hpp"
 
 namespace vgr::protocol {
@@ -35,7 +38,13 @@ constexpr auto kByteTimeout = std::chrono::milliseconds(200);  // ModbusRequestH
 // dropped (a peer dribbling bytes never holds the server: reads never block).
 constexpr auto kFrameTimeout = std::chrono::milliseconds(500);
 constexpr std::size_t kReadChunk = 4096;  // bytes read per readable client per poll round
-constexpr int kSendTimeoutMs = 200;                // a client that does not read is dropped
+// A connection's unanswered bytes at most: reading pauses beyond it (TCP flow control then
+// holds a pipelining client back) until kMaxAdusPerRound-sized bites have answered them.
+constexpr std::size_t kMaxPendingBytes = 4 * kModbusTcpMaxAdu;
+constexpr int kSendBufferBytes = 32 * 1024;     // per client socket (the kernel doubles it)
+constexpr int kReceiveBufferBytes = 64 * 1024;  // per client socket (the kernel doubles it)
+constexpr int kConnLogBurst = 20;  // connection events logged per kConnLogWindow, the rest counted
+constexpr auto kConnLogWindow = std::chrono::seconds(10);
 
 std::string errnoText(int err) { return std::strerror(err); }
 
@@ -56,9 +65,12 @@ struct ModbusServer::Impl {
   struct Client {
     int fd = -1;
     std::string peer;
+    in_addr address{};
+    bool mayWrite = true;  // in controlClients (or no list)
     std::vector<std::uint8_t> pending;  // bytes of the request(s) not yet complete
     Clock::time_point frameStart{};     // when the first byte of `pending` arrived
     Clock::time_point lastActivity{};   // when bytes last arrived (or it connected)
+    TokenBucket budget{kModbusRequestsPerSecond, kModbusRequestBurst};
   };
 
   Impl(ModbusOptions o, TriggerHandler h) : options(std::move(o)), onTrigger(std::move(h)), map(options.floatOrder) {
@@ -79,6 +91,29 @@ struct ModbusServer::Impl {
   std::array<int, 2> wakePipe{-1, -1};
   std::vector<Client> clients;
   std::vector<in_addr> allowed;  // options.allowedClients, parsed
+  std::vector<in_addr> control;  // options.controlClients, parsed
+  int perAddress = 0;            // options.maxClientsPerAddress, resolved
+  TokenBucket acceptBudget{kModbusAcceptsPerSecond, kModbusAcceptBurst};  // Modbus thread
+  log::LogLimiter connLimiter{kConnLogBurst, kConnLogWindow};  // Modbus thread
+  struct AtomicStats {
+    std::atomic<std::uint64_t> accepted{0}, closed{0}, refusedNotAllowed{0}, refusedFull{0}, writesRefused{0},
+        logLinesHeldBack{0};
+  } stats;
+  // A connection event through the rate limit (Modbus thread).
+  template <class... Args>
+  void connLog(bool warning, fmt::format_string<Args...> f, Args&&... args) {
+    std::uint64_t heldBack = 0;
+    if (!connLimiter.allow(heldBack)) {
+      ++stats.logLinesHeldBack;
+      return;
+    }
+    std::string line = fmt::format(f, std::forward<Args>(args)...);
+    if (heldBack > 0) line += fmt::format(" ({} more connection events not logged)", heldBack);
+    if (warning)
+      log::warn("modbus", "{}", line);
+    else
+      log::info("modbus", "{}", line);
+  }
   std::uint16_t boundPort = 0;
   std::thread thread;
   Heartbeat heartbeat;  // beaten by the Modbus thread at every poll() turn
@@ -87,7 +122,12 @@ struct ModbusServer::Impl {
   void stop();
   void run();
   void acceptClient();
-  bool serveClient(Client& c);  // false: the client was dropped
+  bool serveClient(Client& c, bool readable);  // false: the client was dropped
+  static bool hasCompleteAdu(const Client& c);
+  // A complete request waits and the connection's budget allows one now.
+  static bool canServe(Client& c, Clock::time_point now) {
+    return hasCompleteAdu(c) && c.budget.nextToken(now) <= now;
+  }
   bool answer(Client& c, const ModbusFrame& req, int length);  // false: the client was dropped
   void dropStalled(Clock::time_point now);
   void closeClient(Client& c, std::string_view why);
@@ -108,6 +148,19 @@ Result<void> ModbusServer::Impl::start() {
       return fail(Status::BadArgument, "modbus: allowed client '" + a + "' is not a numeric IPv4 address");
     }
     allowed.push_back(ip);
+  }
+  if (options.maxClientsPerAddress < 0 || options.maxClientsPerAddress > options.maxClients) {
+    return fail(Status::BadArgument, "modbus: maxClientsPerAddress " + std::to_string(options.maxClientsPerAddress) +
+                                         " outside [0, maxClients]");
+  }
+  perAddress = options.maxClientsPerAddress == 0 ? options.maxClients : options.maxClientsPerAddress;
+  control.clear();
+  for (const auto& a : options.controlClients) {
+    in_addr ip{};
+    if (inet_pton(AF_INET, a.c_str(), &ip) != 1) {
+      return fail(Status::BadArgument, "modbus: control client '" + a + "' is not a numeric IPv4 address");
+    }
+    control.push_back(ip);
   }
   sockaddr_in addr{};
   addr.sin_family = AF_INET;
@@ -141,10 +194,14 @@ Result<void> ModbusServer::Impl::start() {
     nameThisThread("vgr-modbus");
     run();
   });
-  log::info("modbus", "listening on {}:{} (max {} clients, idle timeout {} ms, {} allowed, floats {})", options.bind,
-            boundPort, options.maxClients, options.idleTimeout.count(),
+  log::info("modbus", "listening on {}:{} (max {} clients, {} per address, idle timeout {} ms, {} allowed, floats {})",
+            options.bind, boundPort, options.maxClients, perAddress, options.idleTimeout.count(),
             allowed.empty() ? std::string("any client") : std::to_string(allowed.size()) + " addresses",
             options.floatOrder == WordOrder::HighWordFirst ? "high word first" : "low word first");
+  if (control.empty()) {
+    log::warn("modbus", "any client may trigger, switch jobs and clear errors (control_clients not set; "
+              "docs/protocols.md)");
+  }
   return {};
 }
 
@@ -173,7 +230,8 @@ void ModbusServer::Impl::closeClient(Client& c, std::string_view why) {
   if (c.fd < 0) return;
   ::close(c.fd);
   c.fd = -1;
-  log::info("modbus", "client {} disconnected: {}", c.peer, why);
+  ++stats.closed;
+  connLog(false, "client {} disconnected: {}", c.peer, why);
 }
 
 void ModbusServer::Impl::acceptClient() {
@@ -187,23 +245,51 @@ void ModbusServer::Impl::acceptClient() {
     return;
   }
   const std::string peer = peerName(addr);
-  if (!allowed.empty() && std::none_of(allowed.begin(), allowed.end(),
-                                       [&](const in_addr& a) { return a.s_addr == addr.sin_addr.s_addr; })) {
+  const auto listed = [&](const std::vector<in_addr>& list) {
+    return std::any_of(list.begin(), list.end(), [&](const in_addr& a) { return a.s_addr == addr.sin_addr.s_addr; });
+  };
+  if (!allowed.empty() && !listed(allowed)) {
     ::close(fd);
-    log::warn("modbus", "client {} refused: not in allowed_clients", peer);
+    ++stats.refusedNotAllowed;
+    connLog(true, "client {} refused: not in allowed_clients", peer);
     return;
   }
-  if (std::ssize(clients) >= options.maxClients) {
+  const auto fromAddress = std::count_if(clients.begin(), clients.end(), [&](const Client& c) {
+    return c.fd >= 0 && c.address.s_addr == addr.sin_addr.s_addr;
+  });
+  if (std::ssize(clients) >= options.maxClients || fromAddress >= perAddress) {
     ::close(fd);
-    log::warn("modbus", "client {} refused: already {} clients", peer, clients.size());
+    ++stats.refusedFull;
+    connLog(true, "client {} refused: already {} clients, {} from its address (max_clients {}, {} per address)", peer,
+            clients.size(), fromAddress, options.maxClients, perAddress);
     return;
   }
   const int one = 1;
   setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
-  timeval sendTimeout{0, kSendTimeoutMs * 1000};
-  setsockopt(fd, SOL_SOCKET, SO_SNDTIMEO, &sendTimeout, sizeof sendTimeout);
-  clients.push_back(Client{fd, peer, {}, {}, Clock::now()});
-  log::info("modbus", "client {} connected ({} connected)", peer, clients.size());
+  // Replies are at most 260 bytes: 32 KiB of them unread is a client that does not read,
+  // found within seconds instead of after megabytes of autotuned buffer.
+  const int sendBuffer = kSendBufferBytes, receiveBuffer = kReceiveBufferBytes;
+  setsockopt(fd, SOL_SOCKET, SO_SNDBUF, &sendBuffer, sizeof sendBuffer);
+  // And what a client pipelines waits in its own socket, not in megabytes of ours.
+  setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &receiveBuffer, sizeof receiveBuffer);
+  // Non-blocking: a reply the socket cannot take at once (the client does not read) fails
+  // and drops that client; the Modbus thread never waits on one client.
+  const int flags = ::fcntl(fd, F_GETFL, 0);
+  if (flags < 0 || ::fcntl(fd, F_SETFL, flags | O_NONBLOCK) != 0) {
+    ::close(fd);
+    log::warn("modbus", "client {} refused: cannot make its socket non-blocking: {}", peer, errnoText(errno));
+    return;
+  }
+  Client c;
+  c.fd = fd;
+  c.peer = peer;
+  c.address = addr.sin_addr;
+  c.mayWrite = control.empty() || listed(control);
+  c.lastActivity = Clock::now();
+  clients.push_back(std::move(c));
+  ++stats.accepted;
+  connLog(false, "client {} connected ({} connected{})", peer, clients.size(),
+          clients.back().mayWrite ? "" : ", read-only: not in control_clients");
 }
 
 std::uint32_t ModbusServer::Impl::callHandler(int jobId) {
@@ -221,32 +307,43 @@ std::uint32_t ModbusServer::Impl::callHandler(int jobId) {
   return cycleId;
 }
 
-bool ModbusServer::Impl::serveClient(Client& c) {
-  // Non-blocking: take what the socket holds now, answer every complete ADU in it, keep
-  // the rest for the next round. No read ever waits for a client.
-  std::array<std::uint8_t, kReadChunk> buf{};
-  const auto n = ::recv(c.fd, buf.data(), buf.size(), MSG_DONTWAIT);
-  if (n == 0) {
-    closeClient(c, "closed by peer");
-    return false;
+bool ModbusServer::Impl::hasCompleteAdu(const Client& c) {
+  return c.fd >= 0 && scanAdu(std::span<const std::uint8_t>(c.pending)).kind != AduScan::Kind::NeedMore;
+}
+
+bool ModbusServer::Impl::serveClient(Client& c, bool readable) {
+  // Non-blocking: take what the socket holds now (up to kMaxPendingBytes buffered), answer
+  // up to kMaxAdusPerRound complete ADUs, keep the rest for the next round. No read ever
+  // waits for a client.
+  if (readable && c.pending.size() < kMaxPendingBytes) {
+    std::array<std::uint8_t, kReadChunk> buf{};
+    const std::size_t room = std::min(buf.size(), kMaxPendingBytes - c.pending.size());
+    const auto n = ::recv(c.fd, buf.data(), room, MSG_DONTWAIT);
+    if (n == 0) {
+      closeClient(c, "closed by peer");
+      return false;
+    }
+    if (n < 0) {
+      if (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) {
+        closeClient(c, errno == ECONNRESET ? std::string("closed by peer") : "receive failed: " + errnoText(errno));
+        return false;
+      }
+    } else {
+      c.lastActivity = Clock::now();
+      if (c.pending.empty()) c.frameStart = c.lastActivity;
+      c.pending.insert(c.pending.end(), buf.begin(), buf.begin() + n);
+    }
   }
-  if (n < 0) {
-    if (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR) return true;
-    closeClient(c, errno == ECONNRESET ? std::string("closed by peer") : "receive failed: " + errnoText(errno));
-    return false;
-  }
-  c.lastActivity = Clock::now();
-  if (c.pending.empty()) c.frameStart = c.lastActivity;
-  c.pending.insert(c.pending.end(), buf.begin(), buf.begin() + n);
 
   std::size_t used = 0;
-  for (;;) {
+  for (int answered = 0; answered < kMaxAdusPerRound; ++answered) {
     const AduScan scan = scanAdu(std::span<const std::uint8_t>(c.pending).subspan(used));
     if (scan.kind == AduScan::Kind::Malformed) {
       closeClient(c, "malformed frame");
       return false;
     }
     if (scan.kind == AduScan::Kind::NeedMore) break;
+    if (!c.budget.take()) break;  // over its request rate: the rest waits for tokens
     ModbusFrame req{};
     std::copy_n(c.pending.begin() + static_cast<std::ptrdiff_t>(used), scan.length, req.begin());
     used += scan.length;
@@ -261,7 +358,12 @@ bool ModbusServer::Impl::serveClient(Client& c) {
 
 bool ModbusServer::Impl::answer(Client& c, const ModbusFrame& req, int length) {
   std::lock_guard lock(mutex);
-  const auto out = handler_->handle(c.fd, req, length, map, [this](int jobId) { return callHandler(jobId); });
+  const auto out =
+      handler_->handle(c.fd, req, length, map, [this](int jobId) { return callHandler(jobId); }, c.mayWrite);
+  if (out.writeRefused) {
+    ++stats.writesRefused;
+    connLog(true, "client {} may not write (not in control_clients): exception 02", c.peer);
+  }
   for (const auto& r : deferred) map.publishResult(r);
   deferred.clear();
   const HandshakeEvents& ev = out.events;
@@ -282,7 +384,7 @@ bool ModbusServer::Impl::answer(Client& c, const ModbusFrame& req, int length) {
 
 void ModbusServer::Impl::dropStalled(Clock::time_point now) {
   for (auto& c : clients) {
-    if (c.fd >= 0 && !c.pending.empty() && now - c.frameStart >= kFrameTimeout) {
+    if (c.fd >= 0 && !c.pending.empty() && !hasCompleteAdu(c) && now - c.frameStart >= kFrameTimeout) {
       closeClient(c, "stalled mid-frame (request incomplete after " + std::to_string(kFrameTimeout.count()) + " ms)");
     } else if (c.fd >= 0 && options.idleTimeout.count() > 0 && now - c.lastActivity >= options.idleTimeout) {
       closeClient(c, "idle for " + std::to_string(options.idleTimeout.count()) + " ms");
@@ -298,8 +400,25 @@ void ModbusServer::Impl::run() {
     fds.clear();
     fds.push_back({wakePipe[0], POLLIN, 0});
     fds.push_back({listenFd, POLLIN, 0});
-    for (const auto& c : clients) fds.push_back({c.fd, POLLIN, 0});
+    bool backlog = false;  // a client has complete requests it may have answered now
     auto wakeAt = nextBeat;
+    const auto roundStart = Clock::now();
+    for (auto& c : clients) {
+      const bool room = c.pending.size() < kMaxPendingBytes;
+      fds.push_back({c.fd, static_cast<short>(room ? POLLIN : 0), 0});
+      if (hasCompleteAdu(c)) {
+        const auto next = c.budget.nextToken(roundStart);
+        if (next <= roundStart) backlog = true;
+        wakeAt = std::min(wakeAt, next);
+      }
+    }
+    // Accepting within the accept budget: the listening socket is polled only when a new
+    // connection may be taken, else the loop wakes when it may.
+    const auto acceptAt = acceptBudget.nextToken(roundStart);
+    const bool mayAccept = acceptAt <= roundStart;
+    fds[1].events = mayAccept ? POLLIN : 0;
+    if (!mayAccept) wakeAt = std::min(wakeAt, acceptAt);
+    if (backlog) wakeAt = roundStart;
     for (const auto& c : clients) {
       if (!c.pending.empty()) wakeAt = std::min(wakeAt, c.frameStart + kFrameTimeout);
       if (options.idleTimeout.count() > 0) wakeAt = std::min(wakeAt, c.lastActivity + options.idleTimeout);
@@ -329,18 +448,21 @@ void ModbusServer::Impl::run() {
       }
     }
     if (rc > 0 && (fds[0].revents & POLLIN) != 0) return;  // stop()
-    if (rc <= 0) {
+    if (rc <= 0 && !backlog && std::none_of(clients.begin(), clients.end(), [&](Client& c) { return canServe(c, now); })) {
       dropStalled(now);
       std::erase_if(clients, [](const Client& c) { return c.fd < 0; });
       continue;
     }
-    // Serve the clients polled in this round (fds[2 + i] belongs to clients[i]).
+    // Serve the clients polled in this round (fds[2 + i] belongs to clients[i]) and those
+    // with complete requests still buffered.
+    const auto serveAt = Clock::now();
     for (std::size_t i = 0; i + 2 < fds.size(); ++i) {
-      if ((fds[i + 2].revents & (POLLIN | POLLHUP | POLLERR)) != 0) serveClient(clients[i]);
+      const bool readable = rc > 0 && (fds[i + 2].revents & (POLLIN | POLLHUP | POLLERR)) != 0;
+      if (readable || canServe(clients[i], serveAt)) serveClient(clients[i], readable);
     }
     dropStalled(Clock::now());
     std::erase_if(clients, [](const Client& c) { return c.fd < 0; });
-    if ((fds[1].revents & POLLIN) != 0) acceptClient();
+    if (rc > 0 && (fds[1].revents & POLLIN) != 0 && acceptBudget.take()) acceptClient();
   }
 }
 
@@ -377,6 +499,20 @@ std::uint16_t ModbusServer::port() const { return impl_->boundPort != 0 ? impl_-
 
 std::string ModbusServer::describe() const {
   return "Modbus server " + impl_->options.bind + ":" + std::to_string(port());
+}
+
+std::string ModbusServer::summary() const {
+  const ModbusServerStats st = stats();
+  return fmt::format("{}: connections {} accepted, {} closed; refused {} not allowed, {} full; {} writes refused; {} "
+                     "log lines held back",
+                     describe(), st.accepted, st.closed, st.refusedNotAllowed, st.refusedFull, st.writesRefused,
+                     st.logLinesHeldBack);
+}
+
+ModbusServerStats ModbusServer::stats() const {
+  const auto& a = impl_->stats;
+  return {a.accepted.load(), a.closed.load(), a.refusedNotAllowed.load(), a.refusedFull.load(), a.writesRefused.load(),
+          a.logLinesHeldBack.load()};
 }
 
 const Heartbeat& ModbusServer::heartbeat() const { return impl_->heartbeat; }

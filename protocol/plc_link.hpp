@@ -34,6 +34,9 @@ class PlcLink {
   virtual void publishResult(const ModbusResult& result) = 0;
   // "Modbus server 127.0.0.1:1502", "Modbus client of 10.0.0.5:502": for logs.
   virtual std::string describe() const = 0;
+  // What the link counted since start (connections, refusals), one line for the daemon's
+  // 60 s summary; empty when it counts nothing. Any thread.
+  virtual std::string summary() const { return {}; }
   // The link's thread beats this at every turn of its loop; stallLimit() is the longest
   // legitimate gap between two beats. vgrd's systemd watchdog stops pinging when a link's
   // thread stays silent longer (daemon/watchdog.hpp). Any thread.

@@ -513,6 +513,11 @@ void RequestDecoder::append(std::string_view bytes) {
   bin_.append(bytes);
 }
 
+std::size_t RequestDecoder::partial() const {
+  if (dialect_ != Dialect::Binary) return text_.buffered() + (text_.discarding() ? 1 : 0);
+  return bin_.size();
+}
+
 std::optional<Result<RobotRequest>> RequestDecoder::next() {
   if (dialect_ != Dialect::Binary) {
     std::optional<Result<std::string>> line = text_.next();

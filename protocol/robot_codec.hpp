@@ -145,6 +145,9 @@ class RequestDecoder {
   void append(std::string_view bytes);
   // The next decoded request or error, or nullopt when more bytes are needed.
   std::optional<Result<RobotRequest>> next();
+  // After next() returned nullopt: bytes of a request that is not complete yet (a text
+  // request being skipped for its length counts as 1); 0 between requests.
+  std::size_t partial() const;
 
  private:
   Dialect dialect_;

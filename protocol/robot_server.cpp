@@ -12,6 +12,7 @@
 #include <memory>
 #include <string_view>
 #include <map>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -23,6 +24,8 @@
 #include <boost/asio/write.hpp>
 
 #include "core/log.hpp"
+#include "core/log_limiter.hpp"
+#include "core/token_bucket.hpp"
 
 namespace vgr::protocol {
 
@@ -32,14 +35,19 @@ using boost::system::error_code;
 
 namespace robot_detail {
 
-constexpr std::size_t kReadChunkBytes = 512;   // one async_read_some
+constexpr std::size_t kReadChunkBytes = 4096;  // one async_read_some (a 1 MB line: 256 reads, not 2048)
+// Connection events (connect, disconnect, refusals) logged per endpoint at most this many
+// per window; the rest are counted (RobotServerStats) and summarised on the next line.
+constexpr int kConnLogBurst = 20;
+constexpr auto kConnLogWindow = std::chrono::seconds(10);
 constexpr std::size_t kMaxQueuedRequests = 8;  // per connection; beyond it we stop reading
 constexpr auto kWriteTimeout = std::chrono::seconds(5);
 constexpr auto kAcceptRetryDelay = std::chrono::milliseconds(200);
-// A reply written after the robot closed its sending side counts as delivered only if the
-// robot has not reset the connection on it this long after: a robot that closed its
-// socket answers our data with RST within one round trip; a half-closed one still reads.
-constexpr auto kEofProbeDelay = std::chrono::milliseconds(50);
+// A reply that carries a part counts as delivered only if the robot has not reset the
+// connection on it this long after it was written: a robot (program) that closed its
+// socket without reading answers our data with RST within one round trip; one that read it
+// and closed sends FIN; a half-closed one still reads.
+constexpr auto kResetProbeDelay = std::chrono::milliseconds(50);
 // Strict dialect: pause before asking again after a reply that came at once and had
 // nothing to push (e.g. NO_PART_FOUND), so a misconfigured job never spins.
 constexpr auto kStrictRetryDelay = std::chrono::milliseconds(100);
@@ -72,15 +80,59 @@ struct ServerCore : std::enable_shared_from_this<ServerCore> {
       : io(ioIn), endpoint(std::move(endpointIn)), handler(std::move(handlerIn)), acceptor(ioIn), retryTimer(ioIn) {}
 
   void doAccept();
+  // doAccept() within the accept budget (kRobotAcceptsPerSecond), else when it allows.
+  void acceptNext();
   void onAccept(const error_code& ec, tcp::socket socket);
   void stopAll();
   bool allowed(const asio::ip::address& peer) const;
+  bool mayControl(const asio::ip::address& peer) const;
+  // A connection event through the endpoint's rate limit (info, or warn).
+  template <class... Args>
+  void connLog(bool warning, fmt::format_string<Args...> f, Args&&... args) {
+    std::uint64_t heldBack = 0;
+    if (!connLimiter.allow(heldBack)) {
+      ++stats.logLinesHeldBack;
+      return;
+    }
+    std::string line = fmt::format(f, std::forward<Args>(args)...);
+    if (heldBack > 0) line += fmt::format(" ({} more connection events not logged)", heldBack);
+    if (warning)
+      log::warn("robot", "{}", line);
+    else
+      log::info("robot", "{}", line);
+  }
 
   asio::io_context& io;
   const RobotEndpoint endpoint;
   const RequestHandler handler;
   StrictOutcomeFn strictOutcome;
   std::vector<asio::ip::address> allowedAddresses;  // parsed from endpoint.allowedClients
+  std::vector<asio::ip::address> controlAddresses;  // parsed from endpoint.controlClients
+  std::size_t maxPerAddress = 0;                    // endpoint.maxClientsPerAddress, resolved
+  RobotServerStats stats;
+  log::LogLimiter connLimiter{kConnLogBurst, kConnLogWindow};
+  TokenBucket acceptBudget{kRobotAcceptsPerSecond, kRobotAcceptBurst};
+  // Session budgets of recently seen addresses (at most kMaxPeerBudgets; one unused for a
+  // second is full again and may be forgotten); addresses beyond those share one.
+  struct PeerBudget {
+    TokenBucket sessions{kRobotSessionsPerSecond, kRobotSessionBurst};
+    TokenBucket::Clock::time_point lastUsed{};
+  };
+  static constexpr std::size_t kMaxPeerBudgets = 256;
+  std::map<asio::ip::address, PeerBudget> peerBudgets;
+  PeerBudget sharedBudget;
+  bool takeSession(const asio::ip::address& address) {
+    const auto now = TokenBucket::Clock::now();
+    auto it = peerBudgets.find(address);
+    if (it == peerBudgets.end()) {
+      if (peerBudgets.size() >= kMaxPeerBudgets)
+        std::erase_if(peerBudgets, [now](const auto& kv) { return now - kv.second.lastUsed > std::chrono::seconds(1); });
+      if (peerBudgets.size() < kMaxPeerBudgets) it = peerBudgets.emplace(address, PeerBudget{}).first;
+    }
+    PeerBudget& b = it == peerBudgets.end() ? sharedBudget : it->second;
+    b.lastUsed = now;
+    return b.sessions.take(now);
+  }
   tcp::acceptor acceptor;
   asio::steady_timer retryTimer;
   std::uint16_t boundPort = 0;
@@ -133,6 +185,12 @@ class Session : public std::enable_shared_from_this<Session> {
 
   void close(std::string_view reason);
   bool closed() const { return closed_; }
+  // Something is in progress on the connection (see RobotEndpoint::staleAfterMs).
+  virtual bool busy() const = 0;
+  // Nothing in progress and no byte from the robot for staleAfter.
+  bool stale(std::chrono::steady_clock::time_point now, std::chrono::milliseconds staleAfter) const {
+    return !closed_ && !busy() && now - lastActivity_ >= staleAfter;
+  }
   // When the robot last sent a byte (or the connection opened, or a reply was written).
   std::chrono::steady_clock::time_point lastActivity() const { return lastActivity_; }
   const asio::ip::address& address() const { return address_; }
@@ -171,11 +229,24 @@ class Session : public std::enable_shared_from_this<Session> {
     writeTimer_.cancel();
     if (closed_) return;
     if (ec) {
+      if (ec == asio::error::connection_reset || ec == asio::error::broken_pipe) resetSeen_ = true;
       close(ec.message());
       return;
     }
     ++replies_;
     onWritten();
+  }
+
+  // The robot reset the connection (RST): our data did not reach a reader.
+  bool socketReset() {
+    if (!socket_.is_open()) return false;
+    tcp_info info{};
+    socklen_t len = sizeof info;
+    if (::getsockopt(socket_.native_handle(), IPPROTO_TCP, TCP_INFO, &info, &len) != 0) return true;
+    int err = 0;
+    len = sizeof err;
+    ::getsockopt(socket_.native_handle(), SOL_SOCKET, SO_ERROR, &err, &len);
+    return info.tcpi_state == TCP_CLOSE || err != 0;
   }
 
   tcp::socket socket_;
@@ -195,6 +266,7 @@ class Session : public std::enable_shared_from_this<Session> {
   bool writing_ = false;
   bool awaitingReply_ = false;
   bool closed_ = false;
+  bool resetSeen_ = false;  // an RST from the robot was seen (read/write error or at close)
 };
 
 // One robot connection of a request/reply dialect. Requests are served strictly one at a
@@ -219,6 +291,10 @@ class RequestSession final : public Session {
     advance();
   }
 
+  bool busy() const override {
+    return awaitingReply_ || writing_ || probes_ > 0 || !inbox_.empty() || partialSince_.has_value();
+  }
+
  private:
   // Moves the state machine on after any event: queue complete requests, serve the next
   // one, keep reading if there is room, finish after the peer's EOF.
@@ -229,27 +305,78 @@ class RequestSession final : public Session {
     if (closed_) return;
     drainDecoder();
     if (!reading_ && !peerEof_ && inbox_.size() < kMaxQueuedRequests) doRead();
-    if (peerEof_ && !awaitingReply_ && !writing_ && inbox_.empty()) close("peer closed the connection");
+    if (peerEof_ && !awaitingReply_ && !writing_ && probes_ == 0 && inbox_.empty()) close("peer closed the connection");
   }
 
   void drainDecoder() {
     while (inbox_.size() < kMaxQueuedRequests) {
       std::optional<Result<RobotRequest>> item = decoder_.next();
-      if (!item) return;
+      if (!item) {
+        trackPartial();
+        return;
+      }
       inbox_.push_back(std::move(*item));
     }
+    partialSince_.reset();  // the decoder may hold complete requests the inbox has no room for
+  }
+
+  // The decoder holds the start of a request: it must be complete within
+  // endpoint.requestTimeoutMs of its first byte (slowloris, a line that never ends).
+  void trackPartial() {
+    if (decoder_.partial() == 0) {
+      partialSince_.reset();
+      return;
+    }
+    if (partialSince_) return;
+    partialSince_ = std::chrono::steady_clock::now();
+    const int ms = server_->endpoint.requestTimeoutMs;
+    partialTimer_.expires_after(std::chrono::milliseconds(ms));
+    partialTimer_.async_wait([self = shared_from_this(), this, ms, since = *partialSince_](const error_code& ec) {
+      if (ec || closed_ || partialSince_ != since) return;
+      close(fmt::format("request incomplete {} ms after its first byte", ms));
+    });
+  }
+
+  void schedulePump() {
+    if (pumpScheduled_) return;
+    pumpScheduled_ = true;
+    pumpTimer_.expires_at(budget_.nextToken());
+    pumpTimer_.async_wait([self = shared_from_this(), this](const error_code& ec) {
+      pumpScheduled_ = false;
+      if (!ec) advance();
+    });
   }
 
   void pump() {
-    if (closed_ || awaitingReply_ || writing_ || inbox_.empty()) return;
+    if (closed_ || awaitingReply_ || writing_ || pumpScheduled_ || inbox_.empty()) return;
     Result<RobotRequest> item = std::move(inbox_.front());
     inbox_.pop_front();
+    if (!item && !budget_.take()) {
+      inbox_.push_front(std::move(item));
+      schedulePump();
+      return;
+    }
     if (!item) {  // malformed: answer at once, in order, and keep the connection
       log::debug("robot", "robot '{}': {} sent a bad request: {}", server_->endpoint.name, peer_,
                  item.error().message);
       RobotReply r;
       r.status = item.error().code;
       writeBytes(formatReply(server_->endpoint.dialect, r, server_->endpoint.replyLabel, server_->endpoint.abbRotation));
+      return;
+    }
+    if (!budget_.take()) {  // over the connection's request rate: served when a token comes
+      inbox_.push_front(std::move(item));
+      schedulePump();
+      return;
+    }
+    if (item->command != Command::Get && !server_->mayControl(address_)) {
+      // JOB and TRIG change what the robot gets or start cycles: only from control_clients.
+      ++server_->stats.controlRefused;
+      server_->connLog(true, "robot '{}': {} may not send {} (not in control_clients): -10 NOT_PERMITTED",
+                       server_->endpoint.name, peer_, item->command == Command::Job ? "JOB" : "TRIG");
+      RobotReply r;
+      r.status = Status::NotPermitted;
+      writeBytes(formatReply(server_->endpoint.dialect, r));
       return;
     }
     callHandler(*item);
@@ -272,6 +399,7 @@ class RequestSession final : public Session {
       return;
     }
     if (ec) {
+      if (ec == asio::error::connection_reset) resetSeen_ = true;
       close(ec.message());
       return;
     }
@@ -302,41 +430,44 @@ class RequestSession final : public Session {
 
   void onWritten() override {
     lastActivity_ = std::chrono::steady_clock::now();
-    if (!peerEof_ || !written_) {
-      settleWritten(true);
+    if (!written_) {
       advance();
       return;
     }
-    // The robot closed its side before this reply: did it close its socket (it resets on
-    // our data) or only shut down sending (it still reads)? Ask again after a round trip.
-    probeTimer_.expires_after(kEofProbeDelay);
-    probeTimer_.async_wait([self = shared_from_this(), this](const error_code& ec) {
-      if (ec || closed_) return;  // close() settled it
-      settleWritten(!peerReset());
+    // A reply with a part: delivered unless the robot resets the connection on it within a
+    // round trip (it closed its socket without reading: a program aborted mid-request). Not
+    // only after an EOF was seen: the robot's close may reach us after our write completed.
+    // The next request is served meanwhile; an EOF closes only after the probes.
+    WrittenFn fn = std::move(written_);
+    written_ = nullptr;
+    ++probes_;
+    auto timer = std::make_shared<asio::steady_timer>(server_->io, kResetProbeDelay);
+    timer->async_wait([self = shared_from_this(), this, timer, fn = std::move(fn)](const error_code&) {
+      --probes_;
+      const bool reset = resetSeen_ || (!closed_ && socketReset());
+      fn(!reset);
       advance();
     });
-  }
-
-  bool peerReset() {
-    tcp_info info{};
-    socklen_t len = sizeof info;
-    if (::getsockopt(socket_.native_handle(), IPPROTO_TCP, TCP_INFO, &info, &len) != 0) return true;
-    int err = 0;
-    len = sizeof err;
-    ::getsockopt(socket_.native_handle(), SOL_SOCKET, SO_ERROR, &err, &len);
-    return info.tcpi_state == TCP_CLOSE || err != 0;
+    advance();
   }
 
   void onClosing() override {
-    probeTimer_.cancel();
+    if (probes_ > 0 && !resetSeen_) resetSeen_ = socketReset();
     idleTimer_.cancel();
+    partialTimer_.cancel();
+    pumpTimer_.cancel();
   }
 
   RequestDecoder decoder_;
-  asio::steady_timer probeTimer_{server_->io};
   asio::steady_timer idleTimer_{server_->io};
+  asio::steady_timer partialTimer_{server_->io};
+  asio::steady_timer pumpTimer_{server_->io};
+  TokenBucket budget_{kRobotRequestsPerSecond, kRobotRequestBurst};
+  bool pumpScheduled_ = false;
+  std::optional<std::chrono::steady_clock::time_point> partialSince_;  // first byte of an incomplete request
   std::deque<Result<RobotRequest>> inbox_;  // parsed requests and error replies, in order
   bool peerEof_ = false;
+  int probes_ = 0;  // replies whose delivery is being checked (kResetProbeDelay)
 };
 
 // One robot connection of the strict dialect (paper 002): vgrd asks its handler for the
@@ -357,6 +488,10 @@ class StrictSession final : public Session {
     doRead();
     ask();
   }
+
+  // vgrd's own GET (waiting for the next part) is not the robot's doing: only a running
+  // exchange or a write makes the connection busy.
+  bool busy() const override { return writing_ || exchange_.step() != StrictExchange::Step::Idle; }
 
   void deliverAwaited(const RobotReply& reply) override {
     awaitingReply_ = false;
@@ -576,13 +711,14 @@ void Session::close(std::string_view reason) {
   socket_.close(ignored);
   writeTimer_.cancel();
   server_->sessions.erase(id_);
-  log::info("robot", "robot '{}': {} disconnected ({}); {} replies sent, {} clients left", server_->endpoint.name,
-            peer_, reason, replies_, server_->sessions.size());
+  ++server_->stats.closed;
+  server_->connLog(false, "robot '{}': {} disconnected ({}); {} replies sent, {} clients left", server_->endpoint.name,
+                   peer_, reason, replies_, server_->sessions.size());
 }
 
-bool ServerCore::allowed(const asio::ip::address& peer) const {
-  if (allowedAddresses.empty()) return true;
-  for (const auto& a : allowedAddresses) {
+namespace {
+bool listed(const std::vector<asio::ip::address>& list, const asio::ip::address& peer) {
+  for (const auto& a : list) {
     if (a == peer) return true;
     // An IPv4 client on a dual-stack socket shows up as ::ffff:a.b.c.d.
     if (peer.is_v6() && peer.to_v6().is_v4_mapped() && a.is_v4() &&
@@ -590,6 +726,15 @@ bool ServerCore::allowed(const asio::ip::address& peer) const {
       return true;
   }
   return false;
+}
+}  // namespace
+
+bool ServerCore::allowed(const asio::ip::address& peer) const {
+  return allowedAddresses.empty() || listed(allowedAddresses, peer);
+}
+
+bool ServerCore::mayControl(const asio::ip::address& peer) const {
+  return controlAddresses.empty() || listed(controlAddresses, peer);
 }
 
 void ServerCore::doAccept() {
@@ -610,34 +755,65 @@ void ServerCore::onAccept(const error_code& ec, tcp::socket socket) {
     return;
   }
 
-  const std::string peer = peerName(socket);
   error_code addrEc;
   const asio::ip::address address = socket.remote_endpoint(addrEc).address();
-  if (addrEc || !allowed(address)) {
-    log::warn("robot", "robot '{}': refusing {}: not in allowed_clients", endpoint.name, peer);
+  const auto refuse = [&] {
     error_code ignored;
     socket.close(ignored);
-    doAccept();
-    return;
+    acceptNext();
+  };
+  if (addrEc) {
+    // Reset by the peer between the kernel's accept and ours (a reset storm): nothing to
+    // serve and nobody to name.
+    ++stats.goneBeforeAccept;
+    log::debug("robot", "robot '{}': a connection was reset before it was accepted: {}", endpoint.name,
+               addrEc.message());
+    return refuse();
   }
-  if (sessions.size() >= endpoint.maxClients) {
-    // Full: a reconnecting robot replaces its own stalest connection (silent the longest;
-    // a rebooted controller's old socket is older than any live one's last request).
+  const std::string peer = peerName(socket);
+  if (!allowed(address)) {
+    ++stats.refusedNotAllowed;
+    connLog(true, "robot '{}': refusing {}: not in allowed_clients", endpoint.name, peer);
+    return refuse();
+  }
+  if (!takeSession(address)) {
+    ++stats.refusedRate;
+    connLog(true, "robot '{}': refusing {}: more than {} new connections a second from its address", endpoint.name,
+            peer, kRobotSessionsPerSecond);
+    return refuse();
+  }
+  std::size_t fromAddress = 0;
+  for (auto& [sid, weak] : sessions) {
+    auto s = weak.lock();
+    if (s && s->address() == address) ++fromAddress;
+  }
+  if (sessions.size() >= endpoint.maxClients || fromAddress >= maxPerAddress) {
+    // Full: a new connection from an address takes the slot of that address's stalest
+    // connection only if it is really stale (nothing in progress, silent for
+    // staleAfterMs: a rebooted controller's old socket). A live one, or one whose robot
+    // waits for its reply, is never closed for a newcomer: the newcomer is refused.
+    const auto now = std::chrono::steady_clock::now();
+    const std::chrono::milliseconds staleAfter(endpoint.staleAfterMs);
     std::shared_ptr<Session> stale;
     for (auto& [sid, weak] : sessions) {
       auto s = weak.lock();
-      if (s && s->address() == address && (!stale || s->lastActivity() < stale->lastActivity())) stale = std::move(s);
+      if (s && s->address() == address && s->stale(now, staleAfter) &&
+          (!stale || s->lastActivity() < stale->lastActivity()))
+        stale = std::move(s);
     }
-    if (stale) {
-      stale->close("replaced by a new connection from the same address");
-    } else {
-      log::warn("robot", "robot '{}': refusing {}: already {} clients (maxClients)", endpoint.name, peer,
-                sessions.size());
-      error_code ignored;
-      socket.close(ignored);
-      doAccept();
-      return;
+    if (!stale) {
+      ++stats.refusedFull;
+      connLog(true, "robot '{}': refusing {}: {} (max_clients {}, {} per address) and none of its connections is stale",
+              endpoint.name, peer,
+              sessions.size() >= endpoint.maxClients ? fmt::format("already {} clients", sessions.size())
+                                                     : fmt::format("already {} clients from its address", fromAddress),
+              endpoint.maxClients, maxPerAddress);
+      return refuse();
     }
+    ++stats.replacedStale;
+    stale->close(fmt::format("stale (nothing in progress, silent for {} ms or more): replaced by a new connection "
+                             "from the same address",
+                             endpoint.staleAfterMs));
   }
   {
     // Option failures only cost latency or dead-peer detection; the session still works.
@@ -657,11 +833,24 @@ void ServerCore::onAccept(const error_code& ec, tcp::socket socket) {
     else
       session = std::make_shared<RequestSession>(std::move(socket), shared_from_this(), id, peer, address);
     sessions.emplace(id, session);
-    log::info("robot", "robot '{}': {} connected ({}/{} clients)", endpoint.name, peer, sessions.size(),
-              endpoint.maxClients);
+    ++stats.accepted;
+    connLog(false, "robot '{}': {} connected ({}/{} clients)", endpoint.name, peer, sessions.size(), endpoint.maxClients);
     session->start();
   }
-  doAccept();
+  acceptNext();
+}
+
+void ServerCore::acceptNext() {
+  if (stopped) return;
+  const auto now = TokenBucket::Clock::now();
+  if (acceptBudget.take(now)) {
+    doAccept();
+    return;
+  }
+  retryTimer.expires_at(acceptBudget.nextToken(now));
+  retryTimer.async_wait([self = shared_from_this()](const error_code& ec) {
+    if (!ec && !self->stopped) self->acceptNext();
+  });
 }
 
 void ServerCore::stopAll() {
@@ -699,6 +888,11 @@ Result<void> RobotServer::start() {
       fmt::format("robot '{}' ({} dialect) on {}:{}", ep.name, dialectName(ep.dialect), ep.bind, ep.port);
   if (l.started || l.stopped) return fail(Status::Internal, where + ": server already started");
   if (ep.maxClients == 0) return fail(Status::Internal, where + ": maxClients is 0");
+  if (ep.maxClientsPerAddress > ep.maxClients)
+    return fail(Status::Internal, where + ": maxClientsPerAddress is above maxClients");
+  if (ep.staleAfterMs <= 0) return fail(Status::Internal, where + ": staleAfterMs must be > 0");
+  if (ep.requestTimeoutMs <= 0) return fail(Status::Internal, where + ": requestTimeoutMs must be > 0");
+  l.maxPerAddress = ep.maxClientsPerAddress == 0 ? ep.maxClients : ep.maxClientsPerAddress;
   if (ep.dialect == Dialect::Strict && ep.stepTimeoutMs <= 0)
     return fail(Status::Internal, where + ": stepTimeoutMs must be > 0");
   l.allowedAddresses.clear();
@@ -707,6 +901,13 @@ Result<void> RobotServer::start() {
     const asio::ip::address parsed = asio::ip::make_address(a, aec);
     if (aec) return fail(Status::Internal, fmt::format("{}: allowed client '{}' is not an IP address", where, a));
     l.allowedAddresses.push_back(parsed);
+  }
+  l.controlAddresses.clear();
+  for (const std::string& a : ep.controlClients) {
+    error_code aec;
+    const asio::ip::address parsed = asio::ip::make_address(a, aec);
+    if (aec) return fail(Status::Internal, fmt::format("{}: control client '{}' is not an IP address", where, a));
+    l.controlAddresses.push_back(parsed);
   }
 
   error_code ec;
@@ -742,8 +943,11 @@ Result<void> RobotServer::start() {
   if (ec) return failWith("getsockname");
 
   l.started = true;
-  log::info("robot", "robot '{}': {} dialect listening on {}:{} (max {} clients)", ep.name, dialectName(ep.dialect),
-            bindTo.address().to_string(), l.boundPort, ep.maxClients);
+  log::info("robot", "robot '{}': {} dialect listening on {}:{} (max {} clients, {} per address)", ep.name,
+            dialectName(ep.dialect), bindTo.address().to_string(), l.boundPort, ep.maxClients, l.maxPerAddress);
+  if (ep.controlClients.empty() && ep.dialect != Dialect::Strict)
+    log::warn("robot", "robot '{}': any client may send JOB and TRIG (control_clients not set; docs/protocols.md)",
+              ep.name);
   l.doAccept();
   return {};
 }
@@ -759,5 +963,7 @@ std::uint16_t RobotServer::port() const { return listener_->boundPort; }
 const RobotEndpoint& RobotServer::endpoint() const { return listener_->endpoint; }
 
 std::size_t RobotServer::clientCount() const { return listener_->sessions.size(); }
+
+RobotServerStats RobotServer::stats() const { return listener_->stats; }
 
 }  // namespace vgr::protocol

@@ -24,6 +24,7 @@ CELL_PACKAGES=(
   libsystemd-dev systemd
   prometheus-cpp-dev  # vgrd's /metrics (prometheus-cpp's core)
   libmosquitto-dev    # vgrd's MQTT sink
+  libopen3d-dev       # vision/cloud/ (3D localization, docs/3d.md): the only target linking it
   libgtest-dev libgmock-dev
 )
 

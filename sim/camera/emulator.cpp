@@ -24,7 +24,7 @@
 
 #include <fmt/format.h>
 
-#include "config/depth_dataset_file.hpp"
+#include "config/depth_dataset.hpp"
 #include "core/log.hpp"
 #include "sim/camera/depth_xml.hpp"
 
@@ -110,7 +110,7 @@ struct CameraEmulator::Impl {
     const std::string& dir = options.depthDataset;
     auto cam = config::loadDepthCameraFile((std::filesystem::path(dir) / "camera.yaml").string());
     if (!cam) return fail(Status::BadArgument, "camera emulator: " + cam.error().message);
-    const auto& k = cam->intrinsics;
+    const DepthIntrinsics k = cam->intrinsics();
     if (std::abs(k.fx - k.fy) > 1e-9 * k.fx)
       return fail(Status::BadArgument, fmt::format("camera emulator: {}/camera.yaml: fx {} and fy {} differ, but a GenICam "
                                                    "depth camera has one Scan3dFocalLength",
@@ -130,11 +130,11 @@ struct CameraEmulator::Impl {
     }
     const std::string truthPath = (std::filesystem::path(dir) / "truth.csv").string();
     if (std::filesystem::exists(truthPath)) {
-      auto rows = config::loadDepthTruthCsv(truthPath);
+      auto rows = config::loadDepthTruth(truthPath);
       if (!rows) return fail(Status::BadArgument, "camera emulator: " + rows.error().message);
       for (const auto& r : *rows) {
         auto& parts = depthTruth[r.image];
-        if (r.modelInCamera) parts.push_back(*r.modelInCamera);
+        if (r.hasPart) parts.push_back(r.pose);
       }
     }
     depthCamera = *cam;
@@ -269,6 +269,13 @@ bool CameraEmulator::pulseLine() {
   return true;
 }
 
+void CameraEmulator::setLossRatio(double ratio) {
+  if (!impl_->camera || !(ratio >= 0.0 && ratio <= 1.0)) return;
+  // Aravis' fake camera thread reads the ratio for every packet it sends.
+  g_object_set(impl_->camera, "gvsp-lost-ratio", ratio, nullptr);
+  log::info("sim", "camera emulator {}: packet loss now {}", impl_->options.serial, ratio);
+}
+
 Result<void> CameraEmulator::start() {
   const auto& o = impl_->options;
   if (!(o.lossRatio >= 0.0 && o.lossRatio <= 1.0))
@@ -353,9 +360,9 @@ Result<void> CameraEmulator::start() {
     impl_->writeF64(kScan3dCoordinateScale, perUnit);
     impl_->writeF64(kScan3dCoordinateOffset, 0.0);
     impl_->writeF64(kScan3dInvalidDataValue, 0.0);
-    impl_->writeF64(kScan3dFocalLength, c.intrinsics.fx);
-    impl_->writeF64(kScan3dPrincipalPointU, c.intrinsics.cx);
-    impl_->writeF64(kScan3dPrincipalPointV, c.intrinsics.cy);
+    impl_->writeF64(kScan3dFocalLength, c.fx);
+    impl_->writeF64(kScan3dPrincipalPointU, c.cx);
+    impl_->writeF64(kScan3dPrincipalPointV, c.cy);
   }
   arv_fake_camera_set_fill_pattern(fake, &Impl::fill, impl_.get());
   const std::string what = impl_->depthMode ? fmt::format("Coord3D_C16 depth images of {} ({} images, {} mm/unit, {})",

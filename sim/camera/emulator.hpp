@@ -5,7 +5,7 @@
 // are produced on Aravis' camera thread in the fill-pattern callback. Mono8, Mono16 and
 // the Bayer8 formats (a gray scene is its own Bayer mosaic), ROI offsets honoured.
 // As a depth camera (`depthDataset`): the scenes of a 3D data-set folder (camera.yaml,
-// images/*.png, truth.csv; config/depth_dataset_file.hpp) as Coord3D_C16, frame id k showing
+// images/*.png, truth.csv; config/depth_dataset.hpp) as Coord3D_C16, frame id k showing
 // image (k - 1) mod n, with a GenICam description extended by Scan3dControl (depth_xml.hpp):
 // Scan3dCoordinateScale = depth_scale_mm in Millimeter (or the unit `depthUnit` names, for
 // tests of a camera the driver must refuse), offset 0, invalid value 0, the focal length and
@@ -53,6 +53,8 @@ class CameraEmulator {
   // TriggerMode=On, TriggerSource=Line0; otherwise ignored (as a real camera). Returns
   // whether the camera was armed for it. Any thread.
   bool pulseLine();
+  // GVSP packet loss from now on, [0, 1] (fault injection: `vgr soak`). Any thread.
+  void setLossRatio(double ratio);
 
  private:
   struct Impl;

@@ -5,6 +5,7 @@
 // example cell (config/examples/sim-cell.yaml): address 127.0.0.1, serial VGR-SIM-0, seed 1.
 // Several cameras: --camera SERIAL@ADDRESS, repeated (one address each; camera i renders
 // with seed + i). SIGUSR1 = one edge on every camera's Line0 (simulated hardware trigger).
+// SIGUSR2 toggles the GVSP packet loss between --loss and --loss-burst (fault injection).
 // Commissioning (docs/commissioning.md): --still (the part does not move; the noise still
 // changes per frame) and --camera-shift X,Y[,Z[,RZ]] (mm, deg: the camera knocked away
 // from where its calibration says it is) override the config's sim.still / sim.camera_shift.
@@ -26,8 +27,10 @@
 namespace {
 volatile std::sig_atomic_t gStop = 0;
 volatile std::sig_atomic_t gPulses = 0;
+volatile std::sig_atomic_t gLossToggles = 0;
 void onSignal(int) { gStop = 1; }
 void onPulse(int) { gPulses = gPulses + 1; }
+void onLossToggle(int) { gLossToggles = gLossToggles + 1; }
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -37,7 +40,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> cameraSpecs;
   long long seed = -1;
   int width = 0, height = 0;
-  double loss = 0.0, fps = 25.0;
+  double loss = 0.0, lossBurst = 0.05, fps = 25.0;
   bool still = false;
   std::string shift;
   int emptyEvery = 0;
@@ -49,6 +52,7 @@ int main(int argc, char** argv) {
   app.add_option("--width", width, "sensor width in px (default: the config's sim.width)")->check(CLI::Range(64, 2448));
   app.add_option("--height", height, "sensor height in px (default: the config's sim.height)")->check(CLI::Range(64, 2048));
   app.add_option("--loss", loss, "probability that a GVSP packet is dropped, e.g. 1e-4")->check(CLI::Range(0.0, 1.0));
+  app.add_option("--loss-burst", lossBurst, "packet loss while a burst is on (SIGUSR2 toggles it)")->check(CLI::Range(0.0, 1.0));
   app.add_option("--fps", fps, "free-run frame rate")->check(CLI::Range(0.1, 1000.0));
   app.add_option("--scene", scene, "what to show: plate, part (textured) or multi (height levels) (default: the config's sim.scene)")
       ->check(CLI::IsMember({"plate", "part", "multi"}));
@@ -132,15 +136,22 @@ int main(int argc, char** argv) {
   std::signal(SIGTERM, onSignal);
   std::signal(SIGINT, onSignal);
   std::signal(SIGUSR1, onPulse);
+  std::signal(SIGUSR2, onLossToggle);
   std::printf("{\"event\":\"ready\",\"address\":\"%s\",\"serial\":\"%s\",\"seed\":%llu,\"cameras\":%zu}\n",
               cams[0].address.c_str(), cams[0].serial.c_str(), static_cast<unsigned long long>(cfg->sim.seed), cams.size());
   std::fflush(stdout);
-  int handled = 0;
+  int handled = 0, togglesHandled = 0;
+  bool burst = false;
   while (!gStop) {
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
     while (handled != gPulses) {
       ++handled;
       for (auto& e : emulators) e->pulseLine();
+    }
+    while (togglesHandled != gLossToggles) {
+      ++togglesHandled;
+      burst = !burst;
+      for (auto& e : emulators) e->setLossRatio(burst ? lossBurst : loss);
     }
   }
   for (std::size_t i = 0; i < emulators.size(); ++i)

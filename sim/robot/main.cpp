@@ -37,10 +37,6 @@
 // the daemon is re-opened (for up to 10 s) and the unanswered request sent again.
 // Exit: 0 all replies valid, 1 any invalid reply, 2 usage or connection failure.
 // Single-threaded: one io_context run by main().
-#if defined(__GNUC__) && !defined(__clang__)
-// GCC 12 reports a false -Wmaybe-uninitialized inside <regex> in sanitizer builds.
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#endif
 
 #include <algorithm>
 #include <array>
@@ -51,7 +47,6 @@
 #include <cstdint>
 #include <iostream>
 #include <optional>
-#include <regex>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -72,6 +67,7 @@
 #include "core/log.hpp"
 #include "core/pose.hpp"
 #include "protocol/robot_codec.hpp"
+#include "protocol/robot_reply.hpp"
 #include "sim/robot/robot_program.hpp"
 #include "sim/sort_check.hpp"
 
@@ -107,9 +103,8 @@ struct Options {
   std::string truthPath, journalPath;
 };
 
-double round3(double v);
-
-// A reply checked against the dialect; the numbers are set only when valid.
+// A reply checked against the dialect (protocol/robot_reply.hpp, shared with fuzz_robot_reply
+// and vgr soak: vgrd's forms and ranges); the numbers are set only when valid.
 struct Parsed {
   bool valid = false;
   std::string error;
@@ -124,120 +119,33 @@ struct Parsed {
   double confidence = 0;
 };
 
-// Fills the six values from the pose the reply carries.
-void setPose(Parsed& p, const vgr::Pose& pose) {
-  const vgr::EulerZyxDeg e = vgr::toEulerZyxDeg(pose);
-  p.xMm = round3(pose.x);
-  p.yMm = round3(pose.y);
-  p.zMm = round3(pose.z);
-  p.rzDeg = round3(e.rz);
-  p.ryDeg = round3(e.ry);
-  p.rxDeg = round3(e.rx);
-}
-
 double round3(double v) {
   const double r = std::round(v * 1000.0) / 1000.0;
   return r == 0.0 ? 0.0 : r;  // no -0 in the output
 }
 
-Parsed parseBinary(const std::string& raw, bool withLabel) {
-  namespace bin = vgr::protocol::binary;
-  Parsed p;
-  const std::size_t bytes = withLabel ? bin::kLabelReplyBytes : bin::kReplyBytes;
-  if (raw.size() != bytes || static_cast<std::uint32_t>(bin::readInt32(raw, 0)) != bin::kReplyMagic ||
-      bin::readInt32(raw, 4) != static_cast<std::int32_t>(bytes)) {
-    p.error = fmt::format("not a {}-byte VGRA frame", bytes);
-    return p;
-  }
-  if (withLabel) {
-    p.label = bin::readInt32(raw, 40);
-    p.confidence = bin::readInt32(raw, 44) / 1000.0;
-  }
-  p.status = bin::readInt32(raw, 8);
-  p.cycle = bin::readInt32(raw, 12);
-  // x, y, z µm; w, p, r millidegrees (R = Rz(r)·Ry(p)·Rx(w))
-  const vgr::EulerZyxDeg e{bin::readInt32(raw, 36) / 1000.0, bin::readInt32(raw, 32) / 1000.0,
-                           bin::readInt32(raw, 28) / 1000.0};
-  setPose(p, vgr::poseFromEulerZyxDeg(bin::readInt32(raw, 16) / 1000.0, bin::readInt32(raw, 20) / 1000.0,
-                                      bin::readInt32(raw, 24) / 1000.0, e));
-  for (std::size_t i = 0; i < 6; ++i) p.values[i] = bin::readInt32(raw, 16 + 4 * i) / 1000.0;
-  p.valid = true;
-  return p;
-}
-
 Parsed parseReply(Dialect dialect, bool abbQuaternion, const std::string& raw, bool withLabel) {
-  if (dialect == Dialect::Binary) return parseBinary(raw, withLabel);
-  static const std::regex kUr(R"(\(-?\d+,\d+(,-?\d+\.\d{6}){6}\))");
-  static const std::regex kAbb(R"(-?\d+,\d+(,-?\d+\.\d{3}){6})");
-  static const std::regex kAbbQuat(R"(-?\d+,\d+(,-?\d+\.\d{3}){3}(,-?\d\.\d{5}){4})");
-  // Fixed columns: status, cycle, X, Y, Z, W, P, R, CR LF (docs/protocols.md, "fanuc").
-  static const std::regex kFanuc(R"([+-]\d{4},\d{7}(,[+-]\d{5}\.\d{3}){3}(,[+-]\d{3}\.\d{3}){3}\r\n)");
-  // reply_label: label and confidence after the pose.
-  static const std::regex kUrLabel(R"(\(-?\d+,\d+(,-?\d+\.\d{6}){6},\d{1,3},[01]\.\d{3}\))");
-  static const std::regex kAbbLabel(R"(-?\d+,\d+(,-?\d+\.\d{3}){6},\d{1,3},[01]\.\d{3})");
-  static const std::regex kAbbQuatLabel(R"(-?\d+,\d+(,-?\d+\.\d{3}){3}(,-?\d\.\d{5}){4},\d{1,3},[01]\.\d{3})");
-  static const std::regex kFanucLabel(R"([+-]\d{4},\d{7}(,[+-]\d{5}\.\d{3}){3}(,[+-]\d{3}\.\d{3}){3},\d{3},[01]\.\d{3}\r\n)");
-  const std::regex& re = dialect == Dialect::Ur      ? (withLabel ? kUrLabel : kUr)
-                         : dialect == Dialect::Fanuc ? (withLabel ? kFanucLabel : kFanuc)
-                         : abbQuaternion             ? (withLabel ? kAbbQuatLabel : kAbbQuat)
-                                                     : (withLabel ? kAbbLabel : kAbb);
   Parsed p;
-  if (!std::regex_match(raw, re)) {
-    p.error = "does not match the dialect";
+  vgr::protocol::ReplyForm form;
+  form.abbRotation = abbQuaternion ? vgr::protocol::AbbRotation::Quaternion : vgr::protocol::AbbRotation::EulerZyx;
+  form.withLabel = withLabel;
+  const vgr::Result<vgr::protocol::ParsedReply> r = vgr::protocol::parseRobotReply(dialect, raw, form);
+  if (!r) {
+    p.error = r.error().message;
     return p;
-  }
-  if (dialect == Dialect::Abb && raw.size() > vgr::protocol::kAbbMaxReplyChars) {
-    p.error = "longer than 80 characters";
-    return p;
-  }
-  std::string_view body(raw);
-  if (dialect == Dialect::Ur) body = body.substr(1, body.size() - 2);
-  if (dialect == Dialect::Fanuc) body = body.substr(0, body.size() - 2);
-  std::array<double, 9> v{};
-  const std::size_t poseFields = dialect == Dialect::Abb && abbQuaternion ? 9 : 8;  // with status, cycle
-  const std::size_t fields = poseFields + (withLabel ? 2 : 0);
-  std::size_t field = 0;
-  while (field < fields) {
-    const std::size_t comma = body.find(',');
-    std::string_view text = body.substr(0, comma);
-    if (!text.empty() && text.front() == '+') text.remove_prefix(1);  // from_chars takes no '+'
-    std::from_chars_result res{};
-    if (field == 0) {
-      res = std::from_chars(text.data(), text.data() + text.size(), p.status);
-    } else if (field == 1) {
-      res = std::from_chars(text.data(), text.data() + text.size(), p.cycle);
-    } else {
-      res = std::from_chars(text.data(), text.data() + text.size(), v[field - 2]);
-    }
-    if (res.ec != std::errc{}) {
-      p.error = "number out of range";
-      return p;
-    }
-    ++field;
-    if (comma == std::string_view::npos) break;
-    body.remove_prefix(comma + 1);
-  }
-  if (!(dialect == Dialect::Abb && abbQuaternion)) std::copy(v.begin(), v.begin() + 6, p.values.begin());
-  if (dialect == Dialect::Ur) {  // metres + rotation vector
-    setPose(p, vgr::poseFromRotationVector(v[0] * 1000.0, v[1] * 1000.0, v[2] * 1000.0, vgr::Vec3{v[3], v[4], v[5]}));
-  } else if (dialect == Dialect::Fanuc) {  // mm + W, P, R degrees
-    setPose(p, vgr::poseFromEulerZyxDeg(v[0], v[1], v[2], vgr::EulerZyxDeg{v[5], v[4], v[3]}));
-  } else if (abbQuaternion) {  // mm + q1..q4 (w, x, y, z)
-    const double n = std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5] + v[6] * v[6]);
-    if (p.status == 0 && std::abs(n - 1.0) > 2e-5) {  // 5 decimals: |q| is 1 within 1e-5
-      p.error = "quaternion is not a unit quaternion";
-      return p;
-    }
-    setPose(p, vgr::poseFromQuaternion(v[0], v[1], v[2], v[3], v[4], v[5], v[6]));
-  } else {  // mm + Z-Y-X degrees rz, ry, rx
-    setPose(p, vgr::poseFromEulerZyxDeg(v[0], v[1], v[2], vgr::EulerZyxDeg{v[3], v[4], v[5]}));
-  }
-  if (withLabel) {
-    const std::size_t at = poseFields - 2;  // v holds the values after status and cycle
-    p.label = static_cast<int>(v[at]);
-    p.confidence = v[at + 1];
   }
   p.valid = true;
+  p.status = r->status;
+  p.cycle = r->cycle;
+  p.xMm = r->xMm;
+  p.yMm = r->yMm;
+  p.zMm = r->zMm;
+  p.rzDeg = r->rzDeg;
+  p.ryDeg = r->ryDeg;
+  p.rxDeg = r->rxDeg;
+  p.values = r->values;
+  p.label = r->label;
+  p.confidence = r->confidence;
   return p;
 }
 

@@ -6,7 +6,7 @@
 // side reads requests until the stream ends or a frame is dropped, like a connection.
 // Checks: ASan/UBSan; the map's invariants after every request (status mirrored in both
 // tables, the PLC area never written by vgrd, BUSY and RESULT_VALID never together, no
-// write above HR 15 ever lands).
+// write above HR 15 ever lands; a read-only client's write never lands nor triggers).
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -76,12 +76,18 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (rc == 0) continue;
     std::array<std::uint16_t, kRegisterCount> before{};
     std::memcpy(before.data(), map.holdingRegisters().data(), sizeof before);
-    const auto out = handler.handle(sv[1], frame, rc, map, onTrigger);
+    // A client outside control_clients (odd transaction ids here) may read, never write.
+    const bool mayWrite = (frame[1] & 1) == 0;
+    const std::uint32_t cyclesBefore = nextCycle;
+    const auto out = handler.handle(sv[1], frame, rc, map, onTrigger, mayWrite);
     checkInvariants(map, before);
-    // Writes outside HR 0..15 are rejected before anything is written.
+    // Writes outside HR 0..15, and every write of a read-only client, are rejected before
+    // anything is written, and trigger nothing.
     if (out.check.verdict == FrameVerdict::RejectAddress) {
       check(std::memcmp(before.data(), map.holdingRegisters().data(), sizeof before) == 0);
+      check(nextCycle == cyclesBefore);
     }
+    if (!mayWrite && out.check.writes) check(out.check.verdict == FrameVerdict::RejectAddress);
     // Drain replies so a long input never blocks on a full socket.
     std::array<char, 4096> sink{};
     while (::recv(sv[0], sink.data(), sink.size(), MSG_DONTWAIT) > 0) {

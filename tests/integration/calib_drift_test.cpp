@@ -16,6 +16,7 @@
 #include <fstream>
 #include <regex>
 #include <string>
+#include <thread>
 
 #include <modbus.h>
 #include <nlohmann/json.hpp>
@@ -46,6 +47,16 @@ class calib_drift : public vgr::test::ModbusCell {
     EXPECT_NE(p, std::string::npos);
     if (p != std::string::npos) y.insert(p + plane.size(), calibExtra);
     return y + "\nweb: {bind: 127.0.0.1, port: " + std::to_string(webPort_) + "}\n";
+  }
+  // The journal once it holds `n` lines (vgrd answers the PLC before it writes the line),
+  // waiting up to 3 s; what it holds then.
+  std::vector<json> journalOf(std::size_t n) {
+    auto lines = journal();
+    for (int i = 0; i < 150 && lines.size() < n; ++i) {
+      std::this_thread::sleep_for(20ms);
+      lines = journal();
+    }
+    return lines;
   }
   void rewrite(const std::string& yaml) { std::ofstream(configPath_) << yaml; }
   std::string verify(const std::string& args, int& exit) {
@@ -109,7 +120,9 @@ TEST_F(calib_drift, KnockedCameraFailsVerifyAndRaisesTheDriftAlarm) {
   ASSERT_NO_FATAL_FAILURE(startVgrd());
   EXPECT_EQ(cycles(10, 1), std::vector<int>(10, 0));
   double quiet = 0;
-  for (const auto& line : journal()) {
+  const auto first = journalOf(10);
+  EXPECT_EQ(first.size(), 10u);
+  for (const auto& line : first) {
     EXPECT_FALSE(line["drift_alarm"].get<bool>()) << line.dump();
     EXPECT_LT(line["drift_mm"].get<double>(), 0.1) << line.dump();
     quiet = std::max(quiet, line["drift_mm"].get<double>());
@@ -140,7 +153,7 @@ TEST_F(calib_drift, KnockedCameraFailsVerifyAndRaisesTheDriftAlarm) {
 
   ASSERT_NO_FATAL_FAILURE(startVgrd());
   EXPECT_EQ(cycles(10, 100), std::vector<int>(10, 0));  // on_alarm: warn keeps delivering
-  const auto lines = journal();
+  const auto lines = journalOf(undisturbed + 10);
   ASSERT_EQ(lines.size(), undisturbed + 10);
   int firstAlarm = 0;
   for (std::size_t k = undisturbed; k < lines.size(); ++k) {

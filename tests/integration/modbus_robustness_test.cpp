@@ -6,6 +6,7 @@
 #include "protocol/modbus_server.hpp"
 #include "tests/support/raw_tcp_client.hpp"
 #include "tests/support/libmodbus_client.hpp"
+#include "tests/support/processes.hpp"
 
 #include <arpa/inet.h>
 #include <netinet/in.h>
@@ -39,8 +40,18 @@ using RawSocket = vgr::test::TestSocket;
 
 using vgr::test::LibmodbusClient;
 
+// The server thread (created by this thread, inheriting its policy) and the good client run
+// SCHED_FIFO, attackers at nice +10: latency on this shared machine is otherwise the other
+// engineers' compilers (tests/support/processes.hpp).
+void attackerPriority() { vgr::test::setThreadNice(10); }
+
 class modbus_robustness : public ::testing::Test {
  protected:
+  void SetUp() override { vgr::test::setThreadRealtime(); }
+  void TearDown() override {
+    server_.reset();
+    vgr::test::setThreadNormal();
+  }
   void startServer(ModbusOptions options = {}) {
     if (options.bind != "0.0.0.0") options.bind = "127.0.0.1";
     options.port = 0;
@@ -67,7 +78,9 @@ struct ReadStats {
   int heartbeatToggles = 0;
 };
 
-// FC04 reads of STATUS, one every 5 ms for `duration`.
+// FC04 reads of STATUS, one every 1 ms for `duration`. Dense enough that a p99 is not made
+// by a few scheduler stalls: on this shared 2-core machine at load ~18, idle reads alone
+// showed single 4-8 ms stalls (idle p99 4 ms in one of four runs at 5 ms spacing).
 ReadStats timeReads(LibmodbusClient& c, std::chrono::milliseconds duration) {
   ReadStats s;
   std::optional<bool> last;
@@ -86,7 +99,7 @@ ReadStats timeReads(LibmodbusClient& c, std::chrono::milliseconds duration) {
     const bool hb = (v & kStatusHeartbeat) != 0;
     if (last && *last != hb) ++s.heartbeatToggles;
     last = hb;
-    std::this_thread::sleep_for(5ms);
+    std::this_thread::sleep_for(1ms);
   }
   return s;
 }
@@ -103,6 +116,7 @@ TEST_F(modbus_robustness, DribblingClientDoesNotStallOtherClientsOrTheHeartbeat)
   std::atomic<bool> stop{false};
   std::atomic<int> dribbled{0};
   std::thread dribbler([&] {
+    attackerPriority();
     const std::string frame("\x00\x01\x00\x00\x00\x06\x01\x04\x00\x10\x00\x01", 12);
     while (!stop) {
       RawSocket s(port_);
@@ -122,8 +136,9 @@ TEST_F(modbus_robustness, DribblingClientDoesNotStallOtherClientsOrTheHeartbeat)
   const double idleP50 = percentile(idle.ms, 0.5), idleP99 = percentile(idle.ms, 0.99);
   const double p50 = percentile(attacked.ms, 0.5), p99 = percentile(attacked.ms, 0.99);
   const double maxMs = attacked.ms.empty() ? 0 : *std::max_element(attacked.ms.begin(), attacked.ms.end());
-  std::printf("idle: %zu reads p50 %.3f ms p99 %.3f ms; under dribble: %zu reads, %d failed, p50 %.3f ms p99 %.3f ms max %.3f ms\n",
-              idle.ms.size(), idleP50, idleP99, attacked.ms.size(), attacked.failures, p50, p99, maxMs);
+  const double idleMax = idle.ms.empty() ? 0 : *std::max_element(idle.ms.begin(), idle.ms.end());
+  std::printf("idle: %zu reads p50 %.3f ms p99 %.3f ms max %.3f ms; under dribble: %zu reads, %d failed, p50 %.3f ms p99 %.3f ms max %.3f ms\n",
+              idle.ms.size(), idleP50, idleP99, idleMax, attacked.ms.size(), attacked.failures, p50, p99, maxMs);
   EXPECT_GT(dribbled.load(), 10);
   EXPECT_EQ(attacked.failures, 0);
   EXPECT_GT(attacked.ms.size(), 300u);
@@ -273,6 +288,130 @@ TEST_F(modbus_robustness, BadAllowedClientFailsStart) {
   const auto r = server.start();
   ASSERT_FALSE(r.has_value());
   EXPECT_NE(r.error().message.find("plc.local"), std::string::npos) << r.error().message;
+}
+
+// Issue 19, item 2: one address may hold at most max_clients_per_address connections, so a
+// storm (or a stuck HMI) on one host leaves the PLC its slot.
+TEST_F(modbus_robustness, PerAddressLimitLeavesSlotsForOtherAddresses) {
+  ModbusOptions o;
+  o.bind = "0.0.0.0";
+  o.maxClients = 4;
+  o.maxClientsPerAddress = 2;
+  startServer(o);
+  RawSocket a1(port_, "127.0.0.1"), a2(port_, "127.0.0.1");
+  ASSERT_TRUE(a1.connected() && a2.connected());
+  ASSERT_TRUE(a1.send(kReadStatus));
+  ASSERT_EQ(a1.recvSome(1000ms).size(), 11u);
+  RawSocket a3(port_, "127.0.0.1");
+  EXPECT_TRUE(a3.closedWithin(1000ms)) << "a third connection from 127.0.0.1";
+  RawSocket plc(port_, "127.0.0.2");
+  ASSERT_TRUE(plc.connected());
+  ASSERT_TRUE(plc.send(kReadStatus));
+  EXPECT_EQ(plc.recvSome(1000ms).size(), 11u) << "another address still gets a slot";
+  EXPECT_EQ(server_->stats().refusedFull, 1u);
+}
+
+// Issue 19, item 6: with control_clients set, only those addresses may write (trigger,
+// switch jobs, clear errors); the others read, and their writes get exception 02 and change
+// nothing. Before, any Modbus client could trigger.
+TEST_F(modbus_robustness, OnlyControlClientsMayWrite) {
+  ModbusOptions o;
+  o.bind = "0.0.0.0";
+  o.controlClients = {"127.0.0.2"};
+  startServer(o);
+  RawSocket hmi(port_, "127.0.0.1");
+  ASSERT_TRUE(hmi.connected());
+  // FC06 CONTROL = TRIGGER from a read-only client.
+  ASSERT_TRUE(hmi.send(std::string("\x00\x07\x00\x00\x00\x06\x01\x06\x00\x00\x00\x01", 12)));
+  const std::string refused = hmi.recvSome(1000ms);
+  ASSERT_EQ(refused.size(), 9u);
+  EXPECT_EQ(static_cast<unsigned char>(refused[7]), 0x86);
+  EXPECT_EQ(static_cast<unsigned char>(refused[8]), 0x02);
+  std::this_thread::sleep_for(50ms);
+  EXPECT_EQ(cycles_.load(), 0u) << "a read-only client triggered a cycle";
+  EXPECT_EQ(server_->holdingRegister(kControl), 0) << "and changed CONTROL";
+  ASSERT_TRUE(hmi.send(kReadStatus));
+  EXPECT_EQ(hmi.recvSome(1000ms).size(), 11u) << "it may read; the connection stays";
+  RawSocket plc(port_, "127.0.0.2");
+  ASSERT_TRUE(plc.send(std::string("\x00\x08\x00\x00\x00\x06\x01\x06\x00\x00\x00\x01", 12)));
+  EXPECT_EQ(plc.recvSome(1000ms).size(), 12u) << "the control client's write is echoed";
+  const auto until = Clock::now() + 1000ms;
+  while (cycles_.load() == 0 && Clock::now() < until) std::this_thread::sleep_for(5ms);
+  EXPECT_EQ(cycles_.load(), 1u);
+  EXPECT_EQ(server_->stats().writesRefused, 1u);
+}
+
+// A client that pipelines requests and never reads its replies: its socket fills up; the
+// server drops it instead of waiting on it (before: each reply that did not fit blocked the
+// one Modbus thread for the 200 ms send timeout, and every other PLC with it).
+TEST_F(modbus_robustness, AClientThatDoesNotReadIsDroppedWithoutStallingTheOthers) {
+  startServer();
+  LibmodbusClient good(port_);
+  ASSERT_TRUE(good.connected);
+  const ReadStats idle = timeReads(good, 2000ms);
+  ASSERT_EQ(idle.failures, 0);
+  std::atomic<bool> stop{false};
+  std::atomic<long> sent{0};
+  std::thread flooder([&] {
+    attackerPriority();
+    RawSocket s(port_);
+    std::string batch;
+    for (int i = 0; i < 1000; ++i) batch += kReadStatus;
+    while (!stop && s.send(batch)) sent += 1000;  // never reads
+  });
+  std::this_thread::sleep_for(200ms);
+  const ReadStats attacked = timeReads(good, 2500ms);
+  const auto until = Clock::now() + 8s;  // its buffers (~MBs on loopback) fill at the server's pace
+  while (server_->stats().closed == 0 && Clock::now() < until) std::this_thread::sleep_for(20ms);
+  stop = true;
+  flooder.join();
+  const double idleP99 = percentile(idle.ms, 0.99), p99 = percentile(attacked.ms, 0.99);
+  std::printf("idle p99 %.3f ms; with a flooding non-reader (%ld requests sent): p99 %.3f ms, %d failed\n", idleP99,
+              sent.load(), p99, attacked.failures);
+  EXPECT_EQ(attacked.failures, 0);
+  EXPECT_LE(p99, std::max(2.0 * idleP99, 1.0));
+  EXPECT_GE(server_->stats().closed, 1u) << "the non-reader was dropped";
+}
+
+// 10,000 requests in one burst, read concurrently: all answered, in order, while another
+// PLC keeps its latency (each connection gets kMaxAdusPerRound per round of the loop).
+TEST_F(modbus_robustness, TenThousandPipelinedRequestsAreAllAnsweredInOrder) {
+  startServer();
+  LibmodbusClient good(port_);
+  ASSERT_TRUE(good.connected);
+  const ReadStats idle = timeReads(good, 2000ms);
+  RawSocket bulk(port_);
+  ASSERT_TRUE(bulk.connected());
+  constexpr int kRequests = 10000;
+  std::string burst;
+  for (int t = 0; t < kRequests; ++t) {
+    std::string req = kReadStatus;
+    req[0] = static_cast<char>((t >> 8) & 0xFF);
+    req[1] = static_cast<char>(t & 0xFF);
+    burst += req;
+  }
+  std::string replies;
+  std::thread reader([&] {
+    attackerPriority();
+    const auto end = Clock::now() + 20s;
+    while (replies.size() < static_cast<std::size_t>(kRequests) * 11 && Clock::now() < end) replies += bulk.recvSome(500ms);
+  });
+  std::thread writer([&] {
+    attackerPriority();
+    (void)bulk.send(burst);
+  });
+  const ReadStats during = timeReads(good, 1500ms);
+  writer.join();
+  reader.join();
+  ASSERT_EQ(replies.size(), static_cast<std::size_t>(kRequests) * 11);
+  for (int t = 0; t < kRequests; ++t) {
+    const auto at = static_cast<std::size_t>(t) * 11;
+    ASSERT_EQ((static_cast<unsigned char>(replies[at]) << 8) | static_cast<unsigned char>(replies[at + 1]), t);
+  }
+  const double idleP99 = percentile(idle.ms, 0.99), p99 = percentile(during.ms, 0.99);
+  std::printf("idle p99 %.3f ms; during 10,000 pipelined requests p99 %.3f ms\n", idleP99, p99);
+  EXPECT_EQ(during.failures, 0);
+  EXPECT_LE(p99, std::max(2.0 * idleP99, 1.0));
 }
 
 }  // namespace

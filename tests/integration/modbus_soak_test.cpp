@@ -8,8 +8,10 @@
 //     the journal; no reply is malformed;
 //   - every cycle reaches at least one client of each endpoint. vgrd delivers a fresh
 //     result once per ENDPOINT name (docs/architecture.md): the clients of one endpoint
-//     share the "delivered" marker, so all clients waiting when a result arrives get it,
-//     and a client asking later waits for the next one.
+//     share the "delivered" marker, so a part goes to one client waiting when it arrives,
+//     the others wait for the next one.
+// The five clients of an endpoint connect from five addresses (127.0.0.1..5): one address
+// may hold at most 4 connections (max_clients_per_address).
 #include <modbus.h>
 
 #include <atomic>
@@ -30,6 +32,7 @@ using Clock = std::chrono::steady_clock;
 
 constexpr auto kSoakDuration = 60s;
 constexpr auto kTriggerPeriod = 100ms;  // 10 Hz
+constexpr const char* kFrom[] = {"127.0.0.1", "127.0.0.2", "127.0.0.3", "127.0.0.4", "127.0.0.5"};
 
 struct RobotLog {
   std::string endpoint;
@@ -38,10 +41,10 @@ struct RobotLog {
   std::vector<std::string> bad;  // first malformed replies
 };
 
-void robotLoop(bool ur, const std::atomic<bool>& stop, RobotLog& log) {
+void robotLoop(bool ur, const char* from, const std::atomic<bool>& stop, RobotLog& log) {
   log.endpoint = ur ? "ur" : "abb";
   // Reads wait up to 5 s, as the robot programs' socket timeouts.
-  vgr::test::RawTcpClient robot(ur ? 50010 : 50011, {.readTimeout = 5s, .throwOnFailure = false});
+  vgr::test::RawTcpClient robot(ur ? 50010 : 50011, {.from = from, .readTimeout = 5s, .throwOnFailure = false});
   if (!robot.connected()) {
     log.errors++;
     return;
@@ -141,7 +144,7 @@ TEST_F(soak_cell, TenRobotsAndA10HzPlcForAMinute) {
   std::vector<RobotLog> robots(10);
   std::vector<std::thread> threads;
   for (std::size_t i = 0; i < robots.size(); ++i)
-    threads.emplace_back([&, i] { robotLoop(i < 5, stop, robots[i]); });
+    threads.emplace_back([&, i] { robotLoop(i < 5, kFrom[i % 5], stop, robots[i]); });
   std::this_thread::sleep_for(200ms);  // every robot is waiting before the first trigger
   PlcLog plc;
   plcLoop(plc);

@@ -6,7 +6,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
-#include "config/depth_dataset_file.hpp"
+#include "config/depth_dataset.hpp"
 #include "sim/calib_scene.hpp"
 #include "sim/depth_calib_scene.hpp"
 
@@ -24,7 +24,7 @@ DepthTestSet writeDepthTestSet(const std::string& dir, int images, unsigned seed
   config::DepthCameraFile file;
   file.width = cam.width;
   file.height = cam.height;
-  file.intrinsics = cam.intrinsics;
+  file.setIntrinsics(cam.intrinsics);
   file.depthScaleMm = cam.depthScaleMm;
   EXPECT_TRUE(config::writeDepthCameraFile((fs::path(dir) / "camera.yaml").string(), file));
   sim::TrueCamera plateCam;
@@ -44,9 +44,9 @@ DepthTestSet writeDepthTestSet(const std::string& dir, int images, unsigned seed
     EXPECT_TRUE(cv::imwrite((fs::path(dir) / name).string(), sim::quantiseDepth(depth, cam.depthScaleMm)));
     set.images.push_back(name);
     set.truth.push_back(empty ? std::vector<Pose>{} : std::vector<Pose>{poses[static_cast<std::size_t>(i)]});
-    rows.push_back({name, empty ? std::nullopt : std::optional<Pose>(poses[static_cast<std::size_t>(i)]), 0});
+    rows.push_back({name, !empty, empty ? Pose{} : poses[static_cast<std::size_t>(i)], 0});
   }
-  EXPECT_TRUE(config::writeDepthTruthCsv((fs::path(dir) / "truth.csv").string(), rows));
+  EXPECT_TRUE(config::writeDepthTruth((fs::path(dir) / "truth.csv").string(), rows));
   return set;
 }
 

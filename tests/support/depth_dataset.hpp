@@ -1,5 +1,5 @@
 // A small 3D data set for the depth-camera tests (the fixed format of issue 13,
-// config/depth_dataset_file.hpp), made without the 3D renderer: the sphere calibration
+// config/depth_dataset.hpp), made without the 3D renderer: the sphere calibration
 // target (sim/depth_calib_scene.hpp) at a few poses in front of the default depth camera,
 // 0.3 mm noise, 16-bit at 0.05 mm per unit. truth.csv gives each image's target pose in the
 // camera frame ("model frame" = the target frame); the last image is empty (no part) when

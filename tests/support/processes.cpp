@@ -1,8 +1,13 @@
 #include "tests/support/processes.hpp"
 
+#include <sched.h>
+#include <sys/resource.h>
 #include <sys/socket.h>
+#include <sys/syscall.h>
 #include <sys/un.h>
 #include <unistd.h>
+
+#include <filesystem>
 
 #include <cstdio>
 #include <cstdlib>
@@ -13,6 +18,35 @@
 #include "tests/support/command.hpp"
 
 namespace vgr::test {
+
+bool setThreadNice(int nice) {
+  return ::setpriority(PRIO_PROCESS, static_cast<id_t>(::syscall(SYS_gettid)), nice) == 0;
+}
+
+namespace {
+constexpr int kMeasuredFifoPriority = 10;
+bool fifo(pid_t tid) {
+  sched_param p{};
+  p.sched_priority = kMeasuredFifoPriority;
+  return ::sched_setscheduler(tid, SCHED_FIFO, &p) == 0;
+}
+}  // namespace
+
+bool setThreadRealtime() { return fifo(static_cast<pid_t>(::syscall(SYS_gettid))); }
+
+bool setProcessRealtime(pid_t pid) {
+  std::error_code ec;
+  bool ok = true;
+  for (const auto& task : std::filesystem::directory_iterator("/proc/" + std::to_string(pid) + "/task", ec))
+    ok = fifo(static_cast<pid_t>(std::stol(task.path().filename().string()))) && ok;
+  return ok && !ec;
+}
+
+void setThreadNormal() {
+  sched_param p{};
+  ::sched_setscheduler(static_cast<pid_t>(::syscall(SYS_gettid)), SCHED_OTHER, &p);
+  setThreadNice(0);
+}
 
 std::unique_ptr<ChildProcess> startEmulator(const std::vector<std::string>& args, const std::string& logPath,
                                             std::chrono::milliseconds timeout) {

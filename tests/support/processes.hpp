@@ -44,6 +44,19 @@ class NotifySocket {
   int fd_ = -1;
 };
 
+// Scheduling for latency measurements on this shared machine: at load ~20 on two cores a
+// woken thread waits 5-70 ms behind other people's compilers, even at nice -10, so both an
+// idle and an attacked p99 say nothing about the server. The measured side (the server's
+// threads, its good client) runs SCHED_FIFO priority 10 while it is measured, as if it had
+// its IPC to itself (it sleeps in poll/epoll between requests; what an attack makes it do is
+// bounded by its token buckets); an attacker runs at nice +10 (a real attacker is another
+// machine, its CPU use is not what a test measures). Root only; false when the kernel
+// refused. setThreadNormal() returns the calling thread to SCHED_OTHER, nice 0.
+bool setThreadNice(int nice);
+bool setThreadRealtime();
+bool setProcessRealtime(pid_t pid);  // every thread of process `pid`
+void setThreadNormal();
+
 // ChildProcess::spawn with NOTIFY_SOCKET=notify.path() in the child's environment only.
 std::optional<ChildProcess> spawnWithNotify(const std::vector<std::string>& argv, const std::string& logPath,
                                             const NotifySocket& notify);

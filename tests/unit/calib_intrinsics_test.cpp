@@ -388,6 +388,21 @@ TEST(calib_intrinsics, yaml_round_trip_and_bad_files) {
   auto bad = vision::calib::readIntrinsics((dir / "bad.yaml").string());
   ASSERT_FALSE(bad);
   EXPECT_NE(bad.error().message.find("camera_matrix"), std::string::npos) << bad.error().message;
+  // A number too large for a double reads as infinite (found by fuzz_calib_files: cx
+  // 6.4e+2607 loaded): refused, naming the key.
+  {
+    FILE* f = std::fopen((dir / "inf.yaml").c_str(), "w");
+    std::fputs("%YAML:1.0\n---\nimage_width: 1280\nimage_height: 1024\n"
+               "camera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n"
+               "   data: [ 1000., 0., 6.4e+2607, 0., 1000., 512., 0., 0., 1. ]\n"
+               "distortion_coefficients: !!opencv-matrix\n   rows: 5\n   cols: 1\n   dt: d\n"
+               "   data: [ 0., 0., 0., 0., 0. ]\n", f);
+    std::fclose(f);
+  }
+  auto inf = vision::calib::readIntrinsics((dir / "inf.yaml").string());
+  ASSERT_FALSE(inf) << "cx = " << inf->cx();
+  EXPECT_EQ(inf.error().code, Status::NotCalibrated);
+  EXPECT_NE(inf.error().message.find("'camera_matrix': value 3 is not a finite number"), std::string::npos) << inf.error().message;
   std::filesystem::remove_all(dir);
 }
 

@@ -12,7 +12,8 @@
 #include <fstream>
 #include <vector>
 
-#include "config/depth_dataset_file.hpp"
+#include "config/depth_dataset.hpp"
+#include "core/pose.hpp"
 #include "drivers/depth_frame.hpp"
 
 namespace vgr::drivers {
@@ -146,7 +147,7 @@ TEST(depth_frame, MultipartRangeAndConfidenceArePickedIntensityIgnored) {
 
 // ---- the 3D data-set files -------------------------------------------------------------------
 
-class depth_dataset_file : public ::testing::Test {
+class depth_dataset : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = std::filesystem::temp_directory_path() / ("vgr-depth-file-" + std::to_string(::getpid()));
@@ -161,12 +162,13 @@ class depth_dataset_file : public ::testing::Test {
   std::filesystem::path dir_;
 };
 
-TEST_F(depth_dataset_file, CameraYamlReadAndItsErrorsNamed) {
+TEST_F(depth_dataset, CameraYamlReadAndItsErrorsNamed) {
   auto c = config::loadDepthCameraFile(
-      write("camera.yaml", "width: 640\nheight: 480\nfx: 570\nfy: 571\ncx: 319.5\ncy: 239.5\ndepth_scale_mm: 0.05\nnoise: 0.3\n"));
+      write("camera.yaml", "width: 640\nheight: 480\nfx: 570\nfy: 571\ncx: 319.5\ncy: 239.5\ndepth_scale_mm: 0.05\n"));
   ASSERT_TRUE(c) << c.error().message;
   EXPECT_EQ(c->width, 640);
-  EXPECT_EQ(c->intrinsics.fy, 571);
+  EXPECT_EQ(c->fy, 571);
+  EXPECT_EQ(c->intrinsics().cx, 319.5);
   EXPECT_EQ(c->depthScaleMm, 0.05);
   auto bad = config::loadDepthCameraFile(write("bad.yaml", "width: 640\nheight: 480\nfx: 570\nfy: 570\ncx: 319.5\ncy: 239.5\n"));
   ASSERT_FALSE(bad);
@@ -176,10 +178,15 @@ TEST_F(depth_dataset_file, CameraYamlReadAndItsErrorsNamed) {
   ASSERT_FALSE(bad);
   EXPECT_NE(bad.error().message.find("neg.yaml:3"), std::string::npos) << bad.error().message;
   EXPECT_NE(bad.error().message.find("'fx'"), std::string::npos) << bad.error().message;
+  // The format is fixed: a key it does not have is named, not ignored.
+  bad = config::loadDepthCameraFile(
+      write("extra.yaml", "width: 640\nheight: 480\nfx: 570\nfy: 570\ncx: 319.5\ncy: 239.5\ndepth_scale_mm: 0.05\nnoise: 0.3\n"));
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.error().message.find("noise"), std::string::npos) << bad.error().message;
 }
 
-TEST_F(depth_dataset_file, TruthCsvRowsEmptyImagesAndErrors) {
-  auto rows = config::loadDepthTruthCsv(write("truth.csv",
+TEST_F(depth_dataset, TruthCsvRowsEmptyImagesAndErrors) {
+  auto rows = config::loadDepthTruth(write("truth.csv",
                                               "image,x_mm,y_mm,z_mm,qw,qx,qy,qz,label\n"
                                               "images/0000.png,10,-5,480,1,0,0,0,gear\n"
                                               "images/0000.png,-40,5,470,0.7071068,0,0.7071068,0,gear\n"
@@ -187,19 +194,38 @@ TEST_F(depth_dataset_file, TruthCsvRowsEmptyImagesAndErrors) {
   ASSERT_TRUE(rows) << rows.error().message;
   ASSERT_EQ(rows->size(), 3u);
   EXPECT_EQ((*rows)[1].image, "images/0000.png");
-  ASSERT_TRUE((*rows)[1].modelInCamera);
-  EXPECT_NEAR((*rows)[1].modelInCamera->qy, 0.7071068, 1e-7);
-  EXPECT_FALSE((*rows)[2].modelInCamera);
-  auto bad = config::loadDepthTruthCsv(write("q.csv", "image,x_mm,y_mm,z_mm,qw,qx,qy,qz\nimages/0.png,1,2,3,0.5,0,0,0\n"));
+  ASSERT_TRUE((*rows)[1].hasPart);
+  EXPECT_NEAR((*rows)[1].pose.qy, 0.7071068, 1e-6);
+  EXPECT_FALSE((*rows)[2].hasPart);
+  auto bad = config::loadDepthTruth(write("q.csv", "image,x_mm,y_mm,z_mm,qw,qx,qy,qz\nimages/0.png,1,2,3,0.5,0,0,0\n"));
   ASSERT_FALSE(bad);
-  EXPECT_NE(bad.error().message.find("q.csv:2: quaternion norm"), std::string::npos) << bad.error().message;
-  bad = config::loadDepthTruthCsv(write("h.csv", "image,x,y,z,qw,qx,qy,qz\n"));
+  EXPECT_NE(bad.error().message.find("q.csv:2: the quaternion"), std::string::npos) << bad.error().message;
+  bad = config::loadDepthTruth(write("h.csv", "image,x,y,z,qw,qx,qy,qz\n"));
   ASSERT_FALSE(bad);
-  EXPECT_NE(bad.error().message.find("column 2 must be 'x_mm'"), std::string::npos) << bad.error().message;
-  bad = config::loadDepthTruthCsv(write("p.csv", "image,x_mm,y_mm,z_mm,qw,qx,qy,qz\nimages/0.png,1,,3,1,0,0,0\n"));
+  EXPECT_NE(bad.error().message.find("(column 2 is 'x')"), std::string::npos) << bad.error().message;
+  bad = config::loadDepthTruth(write("p.csv", "image,x_mm,y_mm,z_mm,qw,qx,qy,qz\nimages/0.png,1,,3,1,0,0,0\n"));
   ASSERT_FALSE(bad);
   EXPECT_NE(bad.error().message.find("p.csv:2"), std::string::npos) << bad.error().message;
   EXPECT_FALSE(config::listDepthImages(dir_.string()));  // no images/ folder
+  std::filesystem::create_directories(dir_ / "images");
+  EXPECT_FALSE(config::listDepthImages(dir_.string()));  // none in it
+  write("images/0001.png", "x");
+  write("images/0000.png", "x");
+  write("images/notes.txt", "x");
+  auto names = config::listDepthImages(dir_.string());
+  ASSERT_TRUE(names) << names.error().message;
+  EXPECT_EQ(*names, (std::vector<std::string>{"images/0000.png", "images/0001.png"}));
+  // What writeDepthTruth writes reads back: a part row and an image's empty row.
+  std::vector<config::DepthTruthRow> out{{"images/0000.png", true, poseFromQuaternion(1, -2, 480, 0.6, 0, 0.8, 0), 0},
+                                         {"images/0001.png", false, Pose{}, 0}};
+  ASSERT_TRUE(config::writeDepthTruth((dir_ / "w.csv").string(), out));
+  auto back = config::loadDepthTruth((dir_ / "w.csv").string());
+  ASSERT_TRUE(back) << back.error().message;
+  ASSERT_EQ(back->size(), 2u);
+  EXPECT_TRUE((*back)[0].hasPart);
+  EXPECT_NEAR((*back)[0].pose.z, 480, 1e-4);
+  EXPECT_NEAR((*back)[0].pose.qy, 0.8, 1e-8);
+  EXPECT_FALSE((*back)[1].hasPart);
 }
 
 }  // namespace

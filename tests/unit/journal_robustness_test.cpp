@@ -124,6 +124,70 @@ TEST_F(journal_robustness, LastCycleIdIsReadBack) {
   EXPECT_EQ(j.lastCycleId(), 42u);
 }
 
+// A size limit with rotation: journal.jsonl -> .1 -> .2 ... up to keepFiles; every record
+// is in exactly one file, complete, and ids run on across the files.
+TEST_F(journal_robustness, RotatesAtTheSizeLimitAndKeepsTheNewestFiles) {
+  JournalOptions o;
+  o.maxBytes = 64 * 1024;
+  o.keepFiles = 3;
+  o.syncMs = -1;
+  const std::size_t lineBytes = Journal::toJson(cycle(1000)).size() + 1;
+  const std::uint32_t records = static_cast<std::uint32_t>(5 * o.maxBytes / lineBytes + 10);
+  {
+    Journal j;
+    ASSERT_TRUE(j.open(path_.string(), o));
+    for (std::uint32_t id = 1000; id < 1000 + records; ++id) j.append(cycle(id));
+    EXPECT_EQ(j.stats().rotations, 5u);
+    EXPECT_EQ(j.stats().records, records);
+  }
+  EXPECT_FALSE(fs::exists(path_.string() + ".4")) << "only keepFiles rotated files are kept";
+  std::vector<std::uint32_t> ids;
+  for (const std::string suffix : {".3", ".2", ".1", ""}) {
+    const fs::path f = path_.string() + suffix;
+    ASSERT_TRUE(fs::exists(f)) << f;
+    if (!suffix.empty()) {
+      EXPECT_GE(fs::file_size(f), o.maxBytes) << f;
+    }
+    for (const auto& line : lines(slurp(f))) {
+      const auto j = nlohmann::json::parse(line, nullptr, false);
+      ASSERT_FALSE(j.is_discarded()) << f << ": " << line;
+      ids.push_back(j["cycle"].get<std::uint32_t>());
+    }
+  }
+  for (std::size_t i = 1; i < ids.size(); ++i) ASSERT_EQ(ids[i], ids[i - 1] + 1) << "at " << i;
+  EXPECT_EQ(ids.back(), 1000 + records - 1);
+}
+
+// Restarting right after a rotation (the new file empty): ids continue after the newest
+// rotated file's last record, not at 1.
+TEST_F(journal_robustness, IdsContinueAfterARotationLeftTheJournalEmpty) {
+  {
+    Journal j;
+    ASSERT_TRUE(j.open(path_.string()));
+    j.append(cycle(77));
+  }
+  fs::rename(path_, path_.string() + ".1");
+  std::ofstream(path_).close();
+  Journal j;
+  ASSERT_TRUE(j.open(path_.string()));
+  EXPECT_EQ(j.lastCycleId(), 77u);
+}
+
+// The fdatasync policy: 0 = after every record, -1 = never, N ms = at most every N ms.
+TEST_F(journal_robustness, SyncPolicy) {
+  const auto syncsWith = [&](int syncMs, const char* name) {
+    JournalOptions o;
+    o.syncMs = syncMs;
+    Journal j;
+    EXPECT_TRUE(j.open((dir_ / name).string(), o));
+    for (std::uint32_t id = 1; id <= 20; ++id) j.append(cycle(id));
+    return j.stats().syncs;
+  };
+  EXPECT_EQ(syncsWith(0, "every.jsonl"), 20u);
+  EXPECT_EQ(syncsWith(-1, "never.jsonl"), 0u);
+  EXPECT_LE(syncsWith(60000, "minute.jsonl"), 1u);
+}
+
 TEST(cycle_ids, ContinueAfterTheJournalsLastAndWrapBelow2To23) {
   EXPECT_EQ(firstCycleIdAfter(0), 1u);
   EXPECT_EQ(firstCycleIdAfter(42), 43u);

@@ -161,27 +161,52 @@ TEST_F(robot_result_store, JobSwitching) {
 
 TEST_F(robot_result_store, EveryWaitingConnectionOfARobotIsAnswered) {
   // Two connections of one robot wait; the image has two parts: one each, in order.
-  std::optional<RobotReply> a, b, c;
+  std::optional<RobotReply> a, b;
   store_.handle("ur", get(), [&](const RobotReply& r) { a = r; });
   store_.handle("ur", get(), [&](const RobotReply& r) { b = r; });
   store_.onResult(result(41, 1, {part(1, 0.9, 0), part(2, 0.8, 0)}));
   ASSERT_TRUE(a && b);
   EXPECT_DOUBLE_EQ(a->pose.x, 1);
   EXPECT_DOUBLE_EQ(b->pose.x, 2);
-  // One part, two waiting connections: the second gets the same part, not a timeout.
-  a.reset();
-  b.reset();
+}
+
+// Issue 19, item 4 (decided: a cycle's part goes to ONE connection of a robot, as
+// docs/protocols.md says). Before, the second waiting connection got the same part of
+// cycle 42 again: one cycle delivered to two connections of one endpoint.
+TEST_F(robot_result_store, OnePartGoesToOneConnectionOfARobotTheOtherWaitsOn) {
+  std::optional<RobotReply> a, b, c;
   store_.handle("ur", get(), [&](const RobotReply& r) { a = r; });
   store_.handle("ur", get(), [&](const RobotReply& r) { b = r; });
   store_.handle("abb", get(), [&](const RobotReply& r) { c = r; });
-  ASSERT_TRUE(c);  // abb never got cycle 41: its first part, at once
-  EXPECT_EQ(c->cycleId, 41u);
   store_.onResult(result(42, 1, {part(3, 0.9, 0)}));
-  ASSERT_TRUE(a && b);
+  ASSERT_TRUE(a && c);
+  EXPECT_EQ(a->cycleId, 42u);
   EXPECT_DOUBLE_EQ(a->pose.x, 3);
-  EXPECT_DOUBLE_EQ(b->pose.x, 3);
+  EXPECT_EQ(c->cycleId, 42u) << "another robot gets its own copy";
+  EXPECT_FALSE(b) << "the robot's second connection got cycle 42 too";
+  // The waiting connection takes the next result, not the one its robot already got.
+  store_.onResult(result(43, 1, {part(4, 0.9, 0)}));
+  ASSERT_TRUE(b);
+  EXPECT_EQ(b->cycleId, 43u);
+  EXPECT_DOUBLE_EQ(b->pose.x, 4);
   // Still once per robot afterwards.
   EXPECT_EQ(ask("ur", get())->status, Status::NoNewTrigger);
+}
+
+TEST_F(robot_result_store, AnExtraWaitingConnectionEndsAtItsDeadlineWithoutARepeat) {
+  std::optional<RobotReply> a, b;
+  store_.handle("ur", get(), [&](const RobotReply& r) { a = r; });
+  store_.handle("ur", get(), [&](const RobotReply& r) { b = r; });
+  store_.onResult(result(44, 1, {part(5, 0.9, 0)}));
+  ASSERT_TRUE(a);
+  const auto until = std::chrono::steady_clock::now() + 500ms;
+  while (!b && std::chrono::steady_clock::now() < until) {
+    io_.restart();
+    io_.run_for(5ms);
+  }
+  ASSERT_TRUE(b) << "answered by its 100 ms deadline";
+  EXPECT_EQ(b->status, Status::NoNewTrigger);
+  EXPECT_EQ(b->cycleId, 0u);
 }
 
 }  // namespace

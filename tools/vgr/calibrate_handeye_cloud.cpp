@@ -12,7 +12,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "config/depth_dataset_file.hpp"
+#include "config/depth_dataset.hpp"
 #include "core/pose.hpp"
 #include "tools/vgr/calibrate_handeye.hpp"
 #include "vision/calib/handeye_cloud.hpp"
@@ -55,7 +55,7 @@ int runCalibrateHandEyeCloud(const CalibHandEyeOptions& o) {
                              camera->height));
     cv::Mat depth;
     raw.convertTo(depth, CV_32F, camera->depthScaleMm);  // 0 stays 0: no data
-    const auto found = calib::findSpheres(depth, camera->intrinsics, target->radiusMm);
+    const auto found = calib::findSpheres(depth, camera->intrinsics(), target->radiusMm);
     auto m = calib::matchSphereTarget(found, *target);
     if (!m) {
       progress(i + 1, poses->size(), p.image, "target NOT found: " + m.error().message);

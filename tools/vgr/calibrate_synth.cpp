@@ -11,7 +11,7 @@
 
 #include "config/cell_config.hpp"
 #include "core/pose.hpp"
-#include "config/depth_dataset_file.hpp"
+#include "config/depth_dataset.hpp"
 #include "sim/calib_scene.hpp"
 #include "sim/depth_calib_scene.hpp"
 #include "vision/calib/handeye.hpp"
@@ -119,7 +119,7 @@ int synthHandEyeCloud(const CalibSynthOptions& o, calib::HandEyeConfig cfg) {
   config::DepthCameraFile camFile;
   camFile.width = cam.width;
   camFile.height = cam.height;
-  camFile.intrinsics = cam.intrinsics;
+  camFile.setIntrinsics(cam.intrinsics);
   camFile.depthScaleMm = cam.depthScaleMm;
   if (auto w = config::writeDepthCameraFile((dir / "camera.yaml").string(), camFile); !w) return bad(w.error().message);
   if (auto w = calib::writeSphereTarget((dir / "target.yaml").string(), target); !w) return bad(w.error().message);

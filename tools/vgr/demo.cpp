@@ -1,8 +1,6 @@
 #include "tools/vgr/demo.hpp"
 
 #include <signal.h>
-#include <sys/socket.h>
-#include <sys/un.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -25,6 +23,7 @@
 #include "core/pose.hpp"
 #include "sim/cell_scenes.hpp"
 #include "sim/dataset.hpp"
+#include "tools/vgr/notify_listener.hpp"
 #include "sim/part_scene.hpp"
 #include "sim/sort_check.hpp"
 
@@ -64,43 +63,6 @@ double rotationDiffDeg(const Pose& a, const Pose& b) {
   const Pose d = compose(inverse(a), b);
   return 2.0 * std::acos(std::min(1.0, std::abs(d.qw))) * 180.0 / M_PI;
 }
-
-// A datagram socket standing in for systemd's NOTIFY_SOCKET: vgrd's READY=1 arrives here.
-class NotifyListener {
- public:
-  explicit NotifyListener(const std::string& path) : path_(path) {
-    fd_ = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
-    sockaddr_un sa{};
-    sa.sun_family = AF_UNIX;
-    std::snprintf(sa.sun_path, sizeof sa.sun_path, "%s", path.c_str());
-    ::unlink(path.c_str());
-    if (::bind(fd_, reinterpret_cast<sockaddr*>(&sa), sizeof sa) != 0) {
-      ::close(fd_);
-      fd_ = -1;
-    }
-  }
-  ~NotifyListener() {
-    if (fd_ >= 0) ::close(fd_);
-    ::unlink(path_.c_str());
-  }
-  bool ok() const { return fd_ >= 0; }
-  bool waitFor(const std::string& what, milliseconds timeout, ChildProcess& child) {
-    const auto deadline = std::chrono::steady_clock::now() + timeout;
-    while (std::chrono::steady_clock::now() < deadline) {
-      if (!child.running()) return false;
-      timeval tv{0, 100000};
-      ::setsockopt(fd_, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
-      char buf[512];
-      const ssize_t n = ::recv(fd_, buf, sizeof buf - 1, 0);
-      if (n > 0 && std::string(buf, static_cast<std::size_t>(n)).find(what) != std::string::npos) return true;
-    }
-    return false;
-  }
-
- private:
-  std::string path_;
-  int fd_ = -1;
-};
 
 struct RobotTally {
   int replies = 0, valid = 0, invalid = 0, ok = 0, mismatched = 0;

@@ -11,6 +11,8 @@ namespace vgr::tools {
 struct EvalCliOptions {
   EvalOptions scoring;
   bool json = false;  // only the final JSON line
+  // A job of kind 3d (tools/vgr/eval3d.hpp): success at <= these.
+  double transTolMm = 2, rotTolDeg = 2;
 };
 
 int runEval(const EvalCliOptions& options);

@@ -17,7 +17,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "config/cell_config.hpp"
-#include "config/depth_dataset_file.hpp"
+#include "config/depth_dataset.hpp"
 #include "drivers/aravis_camera.hpp"
 #include "drivers/camera.hpp"
 #include "drivers/camera_worker.hpp"
@@ -129,13 +129,13 @@ int runGrab(const GrabOptions& o) {
     auto r = worker.grab(frame, t0 + milliseconds(deadlineMs), &st);
     const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     if (r && !o.saveFolder.empty() && frame.depth()) {
-      // A depth camera: the frames as a 3D data set (config/depth_dataset_file.hpp):
+      // A depth camera: the frames as a 3D data set (config/depth_dataset.hpp):
       // images/frame_<id>.png in units of kSaveDepthScaleMm, camera.yaml from the first frame.
       if (!depthSetStarted) {
         config::DepthCameraFile camFile;
         camFile.width = frame.width;
         camFile.height = frame.height;
-        camFile.intrinsics = frame.intrinsics;
+        camFile.setIntrinsics(frame.intrinsics);
         camFile.depthScaleMm = kSaveDepthScaleMm;
         std::error_code dirEc;
         std::filesystem::create_directories(std::filesystem::path(o.saveFolder) / "images", dirEc);

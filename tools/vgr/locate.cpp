@@ -110,6 +110,7 @@ int runLocate(const LocateOptions& o) {
     p["x_px"] = d.u;
     p["y_px"] = d.v;
     p["angle_deg"] = d.angleDeg;
+    p["scale"] = d.scale;
     p["score"] = d.score;
     if (!job->classify.model.empty()) {  // a classifying job (docs/classification.md): 0 = unknown
       p["label"] = d.label;
@@ -132,7 +133,7 @@ int runLocate(const LocateOptions& o) {
   } else {
     std::printf("%s: %zu part(s) in %.1f ms (%s)\n", o.image.c_str(), out->parts.size(), ms, method.c_str());
     for (const auto& d : out->parts) {
-      std::printf("  x %.2f px  y %.2f px  angle %.2f deg  score %.3f", d.u, d.v, d.angleDeg, d.score);
+      std::printf("  x %.2f px  y %.2f px  angle %.2f deg  scale %.4f  score %.3f", d.u, d.v, d.angleDeg, d.scale, d.score);
       if (!job->classify.model.empty()) std::printf("  label %d (confidence %.3f)", d.label, d.confidence);
       std::printf("\n");
     }

@@ -7,6 +7,8 @@
 //   vgr repeatability --config CELL --shots N   spread of a still part (docs/commissioning.md)
 //   vgr sim render | teach | locate | eval   localization datasets, jobs, runs (docs/localization.md)
 //   vgr classify train | eval   paper 002's part classifier (docs/classification.md)
+//   vgr soak [--triggers N]   fault-injection run of the simulated cell (docs/robustness.md)
+//   vgr journal-bench         the journal's write and fdatasync cost per record (docs/journal.md)
 //   vgr replay --journal J --archive A --job DIR   a changed job on archived frames (docs/commissioning.md)
 #include <map>
 #include <memory>
@@ -32,9 +34,11 @@
 #include "tools/vgr/eval.hpp"
 #include "tools/vgr/grab.hpp"
 #include "tools/vgr/locate.hpp"
+#include "tools/vgr/journal_bench.hpp"
 #include "tools/vgr/repeatability.hpp"
 #include "tools/vgr/replay.hpp"
 #include "tools/vgr/sim_render.hpp"
+#include "tools/vgr/soak.hpp"
 #include "tools/vgr/subcommand.hpp"
 #include "tools/vgr/teach.hpp"
 
@@ -70,6 +74,7 @@ int main(int argc, char** argv) {
   // Every subcommand, in the order `vgr --help` lists them.
   Entry table[] = {
       {nullptr, std::make_unique<tools::DemoCommand>()},
+      {nullptr, std::make_unique<tools::SoakCommand>()},
       {nullptr, std::make_unique<tools::CheckCommand>()},
       {nullptr, std::make_unique<tools::CamerasCommand>()},
       {nullptr, std::make_unique<tools::GrabCommand>()},
@@ -86,6 +91,7 @@ int main(int argc, char** argv) {
       {nullptr, std::make_unique<tools::ReplayCommand>()},
       {"classify", std::make_unique<tools::ClassifyTrainCommand>()},
       {"classify", std::make_unique<tools::ClassifyEvalCommand>()},
+      {nullptr, std::make_unique<tools::JournalBenchCommand>()},
   };
 
   std::map<std::string, CLI::App*> groups;  // added when their first member is

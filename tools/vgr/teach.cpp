@@ -1,5 +1,8 @@
 #include "tools/vgr/teach.hpp"
 
+#include <unistd.h>
+
+#include <cmath>
 #include <cstdio>
 #include <exception>
 #include <filesystem>
@@ -10,9 +13,12 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "config/job.hpp"
+#include "config/job3d.hpp"
+#include "vision/cloud/locator3d.hpp"
 #include "vision/gray_image.hpp"
 #include "vision/locate/locator.hpp"
 #include "vision/locate/regions.hpp"
+#include "vision/ply_file.hpp"
 
 namespace vgr::tools {
 namespace {
@@ -39,8 +45,58 @@ bool parseNumbers(const std::string& text, std::size_t n, std::vector<double>& o
 
 }  // namespace
 
+namespace {
+
+int runTeach3d(const TeachOptions& o) {
+  namespace fs = std::filesystem;
+  if (!o.image.empty() || !o.grasps.empty() || !o.roi.empty() || !o.regionsFile.empty() || !o.params.empty() || !o.polarity.empty())
+    return badInput("--model makes a 3D job: --image, --grasp, --roi, --regions, --param and --polarity are for 2D jobs");
+  auto cloud = vision::readPlyCloud(o.model);
+  if (!cloud) return badInput(cloud.error().message);
+  config::Job3dFile job;
+  job.name = o.name.empty() ? fs::path(o.out).filename().string() : o.name;
+  job.search.maxParts = o.maxParts;
+  if (!o.graspPose.empty()) {
+    std::vector<double> v;
+    if (!parseNumbers(o.graspPose, 7, v))
+      return badInput(fmt::format("--grasp-pose: expected X,Y,Z,QW,QX,QY,QZ (mm, unit quaternion), got '{}'", o.graspPose));
+    const double n = std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5] + v[6] * v[6]);
+    if (std::abs(n - 1) > 1e-3) return badInput(fmt::format("--grasp-pose: the quaternion is not unit length (|q| = {:.6f})", n));
+    job.grasp = {v[0], v[1], v[2], v[3] / n, v[4] / n, v[5] / n, v[6] / n};
+  }
+  // The locator must accept the model (normals, size) before anything is written.
+  if (auto loc = vision::cloud::makeLocator3d(*cloud, job.grasp, job.search); !loc)
+    return badInput(o.model + ": " + loc.error().message);
+  if (fs::exists(o.out)) return badInput(o.out + ": already exists (a 3D job is written into a new folder)");
+  const fs::path tmp = fs::path(o.out).string() + fmt::format(".partial-{}", ::getpid());
+  std::error_code ec;
+  fs::remove_all(tmp, ec);
+  fs::create_directories(tmp, ec);
+  if (ec) return badInput(fmt::format("{}: cannot create: {}", tmp.string(), ec.message()));
+  job.folder = tmp.string();
+  auto cleanUp = [&](const std::string& why) {
+    fs::remove_all(tmp, ec);
+    return badInput(why);
+  };
+  if (auto w = vision::writePlyCloud(job.modelPath(), *cloud, "vgr teach --model " + o.model); !w) return cleanUp(w.error().message);
+  if (auto w = config::writeJob3d(job); !w) return cleanUp(w.error().message);
+  auto back = config::loadJob3d(tmp.string());  // what was written must load
+  if (!back) return cleanUp("written job does not load: " + back.error().message);
+  if (auto m = vision::readPlyCloud(back->modelPath()); !m || m->points.size() != cloud->points.size())
+    return cleanUp(back->modelPath() + ": written model does not read back");
+  fs::rename(tmp, o.out, ec);
+  if (ec) return cleanUp(fmt::format("{}: cannot rename to {}: {}", tmp.string(), o.out, ec.message()));
+  std::printf("%s: 3D job '%s', model %zu points\n", o.out.c_str(), job.name.c_str(), cloud->points.size());
+  return 0;
+}
+
+}  // namespace
+
 int runTeach(const TeachOptions& o) {
   namespace fs = std::filesystem;
+  if (!o.model.empty()) return runTeach3d(o);
+  if (o.image.empty()) return badInput("--image is required (or --model for a 3D job)");
+  if (o.grasps.empty()) return badInput("--grasp is required with --image");
   const cv::Mat img = vision::readGray8(o.image).value_or(cv::Mat());
   if (img.empty()) return badInput(o.image + ": cannot read the image");
   config::JobFile job;
@@ -66,6 +122,9 @@ int runTeach(const TeachOptions& o) {
   job.taught.angleMinDeg = o.angleMin;
   job.taught.angleMaxDeg = o.angleMax;
   if (o.angleMax < o.angleMin) return badInput("--angle-max must not be below --angle-min");
+  job.taught.scaleMin = o.scaleMin;
+  job.taught.scaleMax = o.scaleMax;
+  if (o.scaleMax < o.scaleMin) return badInput("--scale-max must not be below --scale-min");
   job.partHeightMm = o.partHeightMm;
   for (const auto& p : o.params) {
     const auto eq = p.find('=');
@@ -104,8 +163,10 @@ int runTeach(const TeachOptions& o) {
 CLI::App* TeachCommand::add(CLI::App& parent) {
   auto& t = options_;
   auto* teachCmd = parent.add_subcommand("teach", "create a job folder from a template image (docs/localization.md)");
-  teachCmd->add_option("--image", t.image, "template image (the part as taught)")->required();
-  teachCmd->add_option("--grasp", t.grasps, "grasp point X,Y in template px (repeat for more; the first is located)")->required();
+  teachCmd->add_option("--image", t.image, "template image (the part as taught; 2D job)");
+  teachCmd->add_option("--grasp", t.grasps, "grasp point X,Y in template px (repeat for more; the first is located; 2D job)");
+  teachCmd->add_option("--model", t.model, "3D job from this model cloud (PLY x y z nx ny nz, mm; docs/3d.md)");
+  teachCmd->add_option("--grasp-pose", t.graspPose, "3D job: grasp pose in the model frame X,Y,Z,QW,QX,QY,QZ (default: the model frame)");
   teachCmd->add_option("--roi", t.roi, "search region X,Y,W,H in live images (default: whole image)");
   teachCmd->add_option("--method", t.method, "locate method");
   teachCmd->add_option("--param", t.params, "method parameter NAME=VALUE (repeatable)");
@@ -119,6 +180,10 @@ CLI::App* TeachCommand::add(CLI::App& parent) {
   teachCmd->add_option("--max-parts", t.maxParts, "[1, 64]")->check(CLI::Range(1, 64));
   teachCmd->add_option("--angle-min", t.angleMin, "deg")->check(CLI::Range(-180.0, 180.0));
   teachCmd->add_option("--angle-max", t.angleMax, "deg")->check(CLI::Range(-180.0, 180.0));
+  teachCmd->add_option("--scale-min", t.scaleMin, "smallest scale searched, image px per template px (default 1)")
+      ->check(CLI::Range(kMinPartScale, kMaxPartScale));
+  teachCmd->add_option("--scale-max", t.scaleMax, "largest scale searched (default 1; a part seen larger is nearer the camera)")
+      ->check(CLI::Range(kMinPartScale, kMaxPartScale));
   teachCmd->add_option("--part-height", t.partHeightMm, "grasp height above the conveyor, mm")->check(CLI::Range(0.0, 1000.0));
   teachCmd->add_option("--name", t.name, "job name (default: the folder name)");
   teachCmd->add_option("--out", t.out, "job folder to create")->required();

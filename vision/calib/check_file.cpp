@@ -1,5 +1,7 @@
 #include "vision/calib/check_file.hpp"
+#include "vision/calib/calib_file_guard.hpp"
 
+#include <exception>
 #include <cmath>
 #include <filesystem>
 
@@ -28,6 +30,7 @@ Result<CheckFile> readCheckFile(const std::string& path) {
   if (!std::filesystem::exists(path)) return fail(Status::NotCalibrated, fmt::format("{}: no such check file", path));
   CheckFile c;
   try {
+    requireYamlText(path);
     cv::FileStorage fs(path, cv::FileStorage::READ);
     if (!fs.isOpened()) return fail(Status::NotCalibrated, fmt::format("{}: cannot read it as OpenCV YAML", path));
     const cv::FileNode root = fs.root();
@@ -65,7 +68,7 @@ Result<CheckFile> readCheckFile(const std::string& path) {
     if (!c.fiducial.present && !c.part.present) throw Bad{"neither 'fiducial' nor 'part': nothing to check"};
   } catch (const Bad& b) {
     return fail(Status::NotCalibrated, fmt::format("{}: {}", path, b.message));
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {  // cv::Exception, and what FileStorage lets through (std::length_error)
     return fail(Status::NotCalibrated, fmt::format("{}: {}", path, e.what()));
   }
   return c;
@@ -93,7 +96,7 @@ Result<void> writeCheckFile(const std::string& path, const CheckFile& c) {
          << c.part.rzDeg;
       fs << "}";
     }
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {  // cv::Exception, and what FileStorage lets through (std::length_error)
     return fail(Status::BadArgument, fmt::format("{}: {}", path, e.what()));
   }
   return {};

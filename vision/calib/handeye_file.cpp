@@ -1,11 +1,13 @@
 #include "vision/calib/handeye.hpp"
 
+#include <exception>
 #include <filesystem>
 
 #include <Eigen/Geometry>
 #include <fmt/core.h>
 #include <opencv2/core/persistence.hpp>
 
+#include "vision/calib/calib_file_guard.hpp"
 #include "vision/calib/se3.hpp"
 
 // handeye.yaml and the synthetic sets' truth.yaml (same layout): written and read here only.
@@ -32,7 +34,7 @@ Result<void> writeHandEyeTruth(const std::string& path, HandEyeConfig config, co
     if (!f.isOpened()) return fail(Status::BadArgument, fmt::format("{}: cannot open for writing", path));
     f << "calibration_kind" << "handeye_truth" << "configuration" << handEyeConfigName(config);
     f << "x" << homogeneous(x) << "y" << homogeneous(y) << "method" << "truth";
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {  // cv::Exception, and what FileStorage lets through (std::length_error)
     return fail(Status::BadArgument, fmt::format("{}: {}", path, e.what()));
   }
   return {};
@@ -58,7 +60,7 @@ Result<void> writeHandEye(const std::string& path, const HandEyeResult& r) {
          << "rot_resid_deg" << m.rotResidDeg << "reproj_rms_px" << m.reprojRmsPx << "point_rms_mm" << m.pointRmsMm
          << "note" << m.note << "}";
     fs << "]";
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {  // cv::Exception, and what FileStorage lets through (std::length_error)
     return fail(Status::BadArgument, fmt::format("{}: {}", path, e.what()));
   }
   return {};
@@ -68,6 +70,7 @@ Result<HandEyeFile> readHandEye(const std::string& path) {
   HandEyeFile f;
   if (!std::filesystem::exists(path)) return fail(Status::NotCalibrated, fmt::format("{}: no such hand-eye file", path));
   try {
+    requireYamlText(path);
     cv::FileStorage fs(path, cv::FileStorage::READ);
     if (!fs.isOpened()) return fail(Status::NotCalibrated, fmt::format("{}: cannot open hand-eye file", path));
     const std::string cfg = static_cast<std::string>(fs["configuration"]);
@@ -76,9 +79,8 @@ Result<HandEyeFile> readHandEye(const std::string& path) {
     else return fail(Status::NotCalibrated, fmt::format("{}: key 'configuration': expected eye-in-hand or eye-to-hand, got '{}'", path, cfg));
     for (const char* key : {"x", "y"}) {
       cv::Mat m;
-      fs[key] >> m;
-      if (m.rows != 4 || m.cols != 4) return fail(Status::NotCalibrated, fmt::format("{}: key '{}': missing or not 4x4", path, key));
-      m.convertTo(m, CV_64F);
+      if (!readSmallMatrix(fs[key], 4, 4, m))
+        return fail(Status::NotCalibrated, fmt::format("{}: key '{}': missing or not 4x4", path, key));
       Iso t = Iso::Identity();
       for (int i = 0; i < 3; ++i) {
         for (int j = 0; j < 3; ++j) t.linear()(i, j) = m.at<double>(i, j);
@@ -92,7 +94,7 @@ Result<HandEyeFile> readHandEye(const std::string& path) {
     f.rotResidDeg = static_cast<double>(fs["rot_resid_deg"]);
     f.reprojRmsPx = static_cast<double>(fs["reproj_rms_px"]);
     f.pointRmsMm = fs["point_rms_mm"].empty() ? 0.0 : static_cast<double>(fs["point_rms_mm"]);
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {  // cv::Exception, and what FileStorage lets through (std::length_error)
     return fail(Status::NotCalibrated, fmt::format("{}: {}", path, e.what()));
   }
   return f;

@@ -1,9 +1,13 @@
 #include "vision/calib/intrinsics.hpp"
 
+#include <cmath>
+#include <exception>
 #include <filesystem>
 
 #include <fmt/core.h>
 #include <opencv2/core/persistence.hpp>
+
+#include "vision/calib/calib_file_guard.hpp"
 
 // intrinsics.yaml (and a synthetic set's camera_truth.yaml, same layout): written and read
 // here only.
@@ -24,7 +28,7 @@ Result<void> writeIntrinsics(const std::string& path, const CameraIntrinsics& ca
     for (const auto& v : cam.views)
       fs << "{" << "name" << v.name << "rms_px" << v.rmsPx << "tilt_deg" << v.tiltDeg << "used" << (v.used ? 1 : 0) << "}";
     fs << "]";
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {  // cv::Exception, and what FileStorage lets through (std::length_error)
     return fail(Status::BadArgument, fmt::format("{}: {}", path, e.what()));
   }
   return {};
@@ -34,17 +38,14 @@ Result<CameraIntrinsics> readIntrinsics(const std::string& path) {
   CameraIntrinsics cam;
   if (!std::filesystem::exists(path)) return fail(Status::NotCalibrated, fmt::format("{}: no such intrinsics file", path));
   try {
+    requireYamlText(path);
     cv::FileStorage fs(path, cv::FileStorage::READ);
     if (!fs.isOpened()) return fail(Status::NotCalibrated, fmt::format("{}: cannot open intrinsics file", path));
     cv::Mat k, d;
-    fs["camera_matrix"] >> k;
-    fs["distortion_coefficients"] >> d;
-    if (k.rows != 3 || k.cols != 3)
+    if (!readSmallMatrix(fs["camera_matrix"], 3, 3, k))
       return fail(Status::NotCalibrated, fmt::format("{}: key 'camera_matrix': missing or not 3x3", path));
-    if (d.total() != 5)
+    if (!readSmallMatrix(fs["distortion_coefficients"], 5, 1, d) && !readSmallMatrix(fs["distortion_coefficients"], 1, 5, d))
       return fail(Status::NotCalibrated, fmt::format("{}: key 'distortion_coefficients': expected 5 values", path));
-    k.convertTo(k, CV_64F);
-    d.convertTo(d, CV_64F);
     cam.cameraMatrix = cv::Matx33d(k);
     for (int i = 0; i < 5; ++i) cam.dist[i] = d.at<double>(i);
     cam.imageSize = cv::Size(static_cast<int>(fs["image_width"]), static_cast<int>(fs["image_height"]));
@@ -52,9 +53,7 @@ Result<CameraIntrinsics> readIntrinsics(const std::string& path) {
     if (!fs["tangential_distortion"].empty()) cam.tangential = static_cast<int>(fs["tangential_distortion"]) != 0;
     if (!fs["std_dev_intrinsics"].empty()) {
       cv::Mat sdm;
-      fs["std_dev_intrinsics"] >> sdm;
-      if (sdm.total() == 9) {
-        sdm.convertTo(sdm, CV_64F);
+      if (readSmallMatrix(fs["std_dev_intrinsics"], 9, 1, sdm)) {
         for (int i = 0; i < 9; ++i) cam.stdDev[i] = sdm.at<double>(i);
       }
     }
@@ -62,9 +61,17 @@ Result<CameraIntrinsics> readIntrinsics(const std::string& path) {
     for (const auto& n : views)
       cam.views.push_back({static_cast<std::string>(n["name"]), static_cast<double>(n["rms_px"]),
                            static_cast<double>(n["tilt_deg"]), static_cast<int>(n["used"]) != 0});
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {  // cv::Exception, and what FileStorage lets through (std::length_error)
     return fail(Status::NotCalibrated, fmt::format("{}: {}", path, e.what()));
   }
+  // A number too large for a double (1e+2607) reads as infinite: refused like a missing one
+  // (found by fuzz_calib_files: an infinite cx loaded).
+  for (int i = 0; i < 9; ++i)
+    if (!std::isfinite(cam.cameraMatrix.val[i]))
+      return fail(Status::NotCalibrated, fmt::format("{}: key 'camera_matrix': value {} is not a finite number", path, i + 1));
+  for (int i = 0; i < 5; ++i)
+    if (!std::isfinite(cam.dist[i]))
+      return fail(Status::NotCalibrated, fmt::format("{}: key 'distortion_coefficients': value {} is not a finite number", path, i + 1));
   if (!(cam.fx() > 0 && cam.fy() > 0) || cam.imageSize.width <= 0 || cam.imageSize.height <= 0)
     return fail(Status::NotCalibrated, fmt::format("{}: focal lengths and image size must be positive", path));
   return cam;

@@ -1,5 +1,6 @@
 #include "vision/calib/mapping.hpp"
 
+#include <exception>
 #include <cmath>
 #include <filesystem>
 
@@ -7,6 +8,7 @@
 #include <fmt/core.h>
 #include <opencv2/calib3d.hpp>
 
+#include "vision/calib/calib_file_guard.hpp"
 #include "vision/calib/se3.hpp"
 
 namespace vgr::vision::calib {
@@ -123,7 +125,7 @@ Result<void> writeWorkPlane(const std::string& path, const WorkPlane& plane, con
     fs << "point_mm" << cv::Vec3d(plane.point.x, plane.point.y, plane.point.z);
     fs << "normal" << cv::Vec3d(plane.normal.x, plane.normal.y, plane.normal.z);
     fs << "fit_rms_mm" << plane.fitRmsMm;
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {  // cv::Exception, and what FileStorage lets through (std::length_error)
     return fail(Status::BadArgument, fmt::format("{}: {}", path, e.what()));
   }
   return {};
@@ -133,6 +135,7 @@ Result<WorkPlane> readWorkPlane(const std::string& path) {
   WorkPlane p;
   if (!std::filesystem::exists(path)) return fail(Status::NotCalibrated, fmt::format("{}: no such plane file", path));
   try {
+    requireYamlText(path);
     cv::FileStorage fs(path, cv::FileStorage::READ);
     if (!fs.isOpened()) return fail(Status::NotCalibrated, fmt::format("{}: cannot open plane file", path));
     cv::Vec3d pt, n;
@@ -146,7 +149,7 @@ Result<WorkPlane> readWorkPlane(const std::string& path) {
     p.point = {pt[0], pt[1], pt[2]};
     p.normal = {n[0] / len, n[1] / len, n[2] / len};
     p.fitRmsMm = static_cast<double>(fs["fit_rms_mm"]);
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {  // cv::Exception, and what FileStorage lets through (std::length_error)
     return fail(Status::NotCalibrated, fmt::format("{}: {}", path, e.what()));
   }
   return p;

@@ -1,5 +1,7 @@
 #include "vision/calib/multi_height_file.hpp"
+#include "vision/calib/calib_file_guard.hpp"
 
+#include <exception>
 #include <cmath>
 #include <filesystem>
 
@@ -54,7 +56,7 @@ Result<void> writeMultiHeight(const std::string& path, const MultiHeightSamples&
     }
     fs << "]";
     fs << "fit_rms_px" << fit.rmsPx << "fit_max_px" << fit.maxPx;
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {  // cv::Exception, and what FileStorage lets through (std::length_error)
     return fail(Status::BadArgument, fmt::format("{}: {}", path, e.what()));
   }
   return {};
@@ -67,6 +69,7 @@ Result<MultiHeightCalibration> readMultiHeight(const std::string& path, double m
   if (!std::filesystem::exists(path)) return fail(Status::NotCalibrated, fmt::format("{}: no such multi-height file", path));
   MultiHeightSamples s;
   try {
+    requireYamlText(path);
     cv::FileStorage fs(path, cv::FileStorage::READ);
     if (!fs.isOpened()) return fail(Status::NotCalibrated, fmt::format("{}: cannot open multi-height file", path));
     if (static_cast<std::string>(fs["kind"]) != "multiheight") return bad("kind", "expected 'multiheight'");
@@ -99,7 +102,7 @@ Result<MultiHeightCalibration> readMultiHeight(const std::string& path, double m
       for (std::size_t i = 0; i < n; ++i) plane.push_back({uv[2 * i], uv[2 * i + 1]});
       s.image.push_back(std::move(plane));
     }
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {  // cv::Exception, and what FileStorage lets through (std::length_error)
     return fail(Status::NotCalibrated, fmt::format("{}: {}", path, e.what()));
   }
   for (double h : s.heights)

@@ -29,6 +29,13 @@ void readOrbParams(ParamReader& r, OrbParams& p) {
   p.fastThreshold = r.integer("fast_threshold", p.fastThreshold, 1, 100);
 }
 
+void applyScaleRange(const TaughtTemplate& taught, OrbParams& orb, FeatureSearch& search) {
+  search.scaleMin = taught.scaleMin, search.scaleMax = taught.scaleMax;
+  const double spread = std::max(taught.scaleMax, 1.0 / taught.scaleMin);
+  if (spread > 1.0)
+    orb.levels = std::min(16, orb.levels + static_cast<int>(std::ceil(std::log(spread) / std::log(orb.scaleFactor) - 1e-9)));
+}
+
 Features detectOrb(const cv::Mat& gray, const cv::Mat& mask, int nFeatures, const OrbParams& p) {
   // ORB's detector is FAST-9 (TYPE_9_16) ranked by the Harris score (paper 000, eq. 1).
   auto orb = cv::ORB::create(nFeatures, static_cast<float>(p.scaleFactor), p.levels, 31, 0, 2, cv::ORB::HARRIS_SCORE,
@@ -111,7 +118,7 @@ std::vector<Match> coarseMatches(const Features& tmpl, const Features& img, cons
   return search.symmetric ? matchBidirectional(tmpl, img, alive, search.mu, search.minDFloor) : matchNearest(tmpl, img, alive);
 }
 
-bool poseFromHomography(const cv::Matx33d& H, PixelPoint grasp, double maxScale, Detection& out) {
+bool poseFromHomography(const cv::Matx33d& H, PixelPoint grasp, double minScale, double maxScale, Detection& out) {
   const cv::Vec3d p = H * cv::Vec3d(grasp.u, grasp.v, 1.0);
   if (std::abs(p[2]) < 1e-9) return false;
   const double u = p[0] / p[2], v = p[1] / p[2];  // paper 001, eq. (15)
@@ -121,9 +128,10 @@ bool poseFromHomography(const cv::Matx33d& H, PixelPoint grasp, double maxScale,
   const double det = j00 * j11 - j01 * j10;
   if (!(det > 0)) return false;  // mirrored or collapsed
   const double scale = std::sqrt(det);
-  if (scale > maxScale || scale < 1.0 / maxScale) return false;
+  if (scale > maxScale || scale < minScale) return false;
   out.u = u;
   out.v = v;
+  out.scale = scale;
   // A turn counter-clockwise as displayed by a maps (x, y) -> (x cos a + y sin a, -x sin a + y cos a)
   // (y down), so J10 - J01 = -2 sin a and J00 + J11 = 2 cos a.
   out.angleDeg = normaliseDeg(-std::atan2(j10 - j01, j00 + j11) * 180.0 / std::numbers::pi);
@@ -217,9 +225,13 @@ Result<LocateOutput> locateFeatureParts(const cv::Mat& gray, const TaughtTemplat
     for (const Match& m : fitted->accepted) alive[static_cast<size_t>(m.i)] = 0;
 
     Found f;
-    if (!poseFromHomography(fitted->H, taught.grasp, search.maxScale, f.d)) continue;
+    if (!poseFromHomography(fitted->H, taught.grasp, search.scaleMin / search.maxScale, search.scaleMax * search.maxScale, f.d))
+      continue;
     f.d.u += roi.x;
     f.d.v += roi.y;
+    // A fixed-scale job's parts are at its scale: the fit's scale within the tolerance
+    // (max_scale) is noise, which partPoses would otherwise turn into a height.
+    if (search.scaleMax <= search.scaleMin) f.d.scale = search.scaleMin;
     const std::size_t support = std::max(fitted->support, fitted->accepted.size());
     f.d.score = std::clamp(static_cast<double>(support) / search.fullScoreInliers, 0.0, 1.0);
     if (f.d.score < taught.minScore || f.d.angleDeg < taught.angleMinDeg || f.d.angleDeg > taught.angleMaxDeg) continue;

@@ -36,6 +36,14 @@ struct OrbParams {
 };
 void readOrbParams(ParamReader& r, OrbParams& p);
 
+struct FeatureSearch;
+// The job's scale range (TaughtTemplate::scaleMin/scaleMax) for an ORB method: the accepted
+// scales, and enough pyramid levels that the template's features at one end of the range
+// meet the image's at the other (ORB pairs features of about the same size: a part seen at
+// scale s matches template level log(1/s) / log(scaleFactor) against image level 0, or
+// image level log(s) / log(scaleFactor) against template level 0).
+void applyScaleRange(const TaughtTemplate& taught, OrbParams& orb, FeatureSearch& search);
+
 struct Features {
   std::vector<cv::KeyPoint> keypoints;  // px, in the coordinates of the image given
   cv::Mat descriptors;                  // CV_8U, 32 bytes per row
@@ -63,10 +71,12 @@ std::vector<Match> matchBidirectional(const Features& tmpl, const Features& img,
 std::vector<Match> matchNearest(const Features& tmpl, const Features& img, const std::vector<char>& alive);
 
 // Paper 001, eq. (15): the template's grasp point through the homography H (template px ->
-// image px), and the rotation of H at that point, counter-clockwise as displayed, in
-// (-180, 180]. Returns false when H is degenerate there (w ~ 0, a mirror, or a scale
-// outside [1/maxScale, maxScale]: parts on a conveyor are seen at one scale).
-bool poseFromHomography(const cv::Matx33d& H, PixelPoint grasp, double maxScale, Detection& out);
+// image px), the rotation of H at that point, counter-clockwise as displayed, in
+// (-180, 180], and its scale there (sqrt of the Jacobian's determinant, Detection::scale;
+// locateFeatureParts reports the job's scale instead for a job without a scale range).
+// Returns false when H is degenerate there (w ~ 0, a mirror) or its scale is outside
+// [minScale, maxScale].
+bool poseFromHomography(const cv::Matx33d& H, PixelPoint grasp, double minScale, double maxScale, Detection& out);
 
 // What a method's filter returns for one part: the homography template -> image and the
 // correspondences it accepted (a subset of the candidates it was given).
@@ -98,7 +108,11 @@ struct FeatureSearch {
   double mu = 5;           // paper 001: T = mu * minD
   double minDFloor = 8;    // Hamming bits
   int minInliers = 12;     // fewer accepted matches: not a part
-  double maxScale = 1.25;  // see poseFromHomography
+  // Scales accepted (poseFromHomography): the job's range [scaleMin, scaleMax] widened by the
+  // factor maxScale ("max_scale", the fit's tolerance), so a fixed-scale job takes
+  // [1 / maxScale, maxScale]: parts on a conveyor are seen at one scale.
+  double maxScale = 1.25;
+  double scaleMin = 1, scaleMax = 1;  // TaughtTemplate::scaleMin/scaleMax (applyScaleRange)
   double fullScoreInliers = 0;  // accepted matches that score 1 (set at teach time)
   bool symmetric = true;   // paper 001's coarse stage; false = plain nearest neighbour template -> image
 };

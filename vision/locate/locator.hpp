@@ -34,6 +34,7 @@ using vgr::TemplateRegion;
 struct Detection {
   double u = 0, v = 0;    // grasp point in the live image, px
   double angleDeg = 0;    // rotation from the template, CCW as displayed, (-180, 180]
+  double scale = 1;       // image px per template px (1 for a method or job without a scale range)
   double score = 0;       // [0, 1], method specific, comparable against minScore
   double areaPx = 0;      // px², 0 when the method does not measure it
   int label = 0;          // which part type / template (0 = the job's one template, or "unknown"

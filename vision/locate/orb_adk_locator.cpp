@@ -213,6 +213,7 @@ Result<std::unique_ptr<Locator>> makeOrbAdkLocator(const cv::Mat& templateGray, 
   p.angleBoundDeg = r.number("angle_bound_deg", p.angleBoundDeg, 0.1, 30);
   p.references = r.integer("references", p.references, 1, 50);
   if (auto ok = r.finish(); !ok) return std::unexpected(ok.error());
+  detail::applyScaleRange(taught, orb, search);
 
   const int minInliers = search.minInliers;
   detail::FitFn fit = [p, minInliers](const std::vector<Match>& c, const Features& t, const Features& i) {

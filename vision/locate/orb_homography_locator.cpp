@@ -69,6 +69,7 @@ Result<std::unique_ptr<Locator>> make(const std::string& name, int robust, const
   hp.maxIters = r.integer("max_iters", hp.maxIters, 100, 100000);
   hp.confidence = r.number("confidence", hp.confidence, 0.5, 0.9999);
   if (auto ok = r.finish(); !ok) return std::unexpected(ok.error());
+  detail::applyScaleRange(taught, orb, search);
 
   detail::FitFn fit = [robust, hp](const std::vector<Match>& c, const Features& t, const Features& i) {
     return fitHomography(c, t, i, robust, hp);

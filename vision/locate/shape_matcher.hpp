@@ -48,6 +48,20 @@ struct ShapeParams {
   double regionShiftPx = 96;    // px, [0, 200]
 };
 
+// Where the time of a "shape" locate() call went (vgr-bench-locate --profile,
+// docs/performance.md): wall time of the calling thread and CPU time of the whole process
+// (every thread: the top-level search runs on OpenCV's pool), in ms, per stage.
+struct ShapeStageTimes {
+  enum Stage { Pyramid, TopGradient, TopSearch, Track, Refine, kCount };
+  double wallMs[kCount] = {};
+  double cpuMs[kCount] = {};
+  static const char* name(int stage);
+};
+
+// The stage times of `locator`'s last locate() call; nullptr when it is not a "shape" locator.
+// Same thread as locate().
+const ShapeStageTimes* shapeStageTimes(const Locator& locator);
+
 // Parses and range-checks TaughtTemplate::params for "shape"; errors name the parameter.
 Result<ShapeParams> parseShapeParams(const TaughtTemplate& taught);
 

@@ -14,6 +14,7 @@ namespace {
 constexpr int kMaxLevels = 7;
 constexpr int kMinTopPoints = 24;
 constexpr double kMinTopRadius = 8.0;
+constexpr std::size_t kMinLevelPoints = 64;
 
 inline float sampleBilinear(const cv::Mat& m, double x, double y) {
   const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
@@ -93,15 +94,19 @@ bool edgeAlongNormal(const cv::Mat& gx, const cv::Mat& gy, double px, double py,
     if (x < 0 || y < 0 || x >= gx.cols - 1 || y >= gx.rows - 1) return false;
   }
   double f[kMaxSamples];
-  int best = 0;
   for (int i = 0; i < n; ++i) {
     const double tt = (i - half) * kStep;
     const double x = px + tt * nx, y = py + tt * ny;
     const double d = nx * sampleBilinear(gx, x, y) + ny * sampleBilinear(gy, x, y);
     f[i] = absPolarity ? std::abs(d) : s * d;
-    if (f[i] > f[best]) best = i;
   }
-  if (best == 0 || best == n - 1 || f[best] < minMag) return false;
+  // The interior maximum; an end sample that ties with it is not better: an edge exactly
+  // between two samples gives two equal ones, and its peak is between them (taking the end
+  // sample there lost every edge on a pixel border whose normal points to +x or +y).
+  int best = 1;
+  for (int i = 2; i < n - 1; ++i)
+    if (f[i] > f[best]) best = i;
+  if (n < 3 || f[0] > f[best] || f[n - 1] > f[best] || f[best] < minMag) return false;
   // Gaussian through the three samples (a parabola through their logarithms): the smoothed
   // gradient across a blurred step edge is close to a Gaussian, for which this is exact,
   // where a plain parabola is biased toward the sample by up to ~0.05 px.
@@ -116,19 +121,30 @@ bool edgeAlongNormal(const cv::Mat& gx, const cv::Mat& gy, double px, double py,
   return true;
 }
 
-Result<Model> buildModel(const cv::Mat& templ, const ShapeParams& params) {
+int Model::templateLevel(int level, double scale) const {
+  const int l = static_cast<int>(std::lround(level + std::log2(1.0 / scale)));
+  return std::clamp(l, 0, static_cast<int>(levels.size()) - 1);
+}
+
+Result<Model> buildModel(const cv::Mat& templ, const ShapeParams& params, double scaleMin) {
   // Replicated border: edges near the template's border stay away from the pyramid's border.
   const int border = 1 << kMaxLevels;
   cv::Mat padded;
   cv::copyMakeBorder(templ, padded, border, border, border, border, cv::BORDER_REPLICATE);
   std::vector<cv::Mat> pyr{padded};
-  while (static_cast<int>(pyr.size()) < kMaxLevels && pyr.back().cols >= 24 && pyr.back().rows >= 24) {
+  while (static_cast<int>(pyr.size()) < kMaxLevels + 2 && pyr.back().cols >= 24 && pyr.back().rows >= 24) {
     cv::Mat next;
     cv::pyrDown(pyr.back(), next, cv::Size(), cv::BORDER_REPLICATE);
     pyr.push_back(next);
   }
   std::vector<std::vector<RawPoint>> raw;
-  for (std::size_t l = 0; l < pyr.size(); ++l) raw.push_back(extractEdges(pyr[l], params.modelContrast, l == 0));
+  for (std::size_t l = 0; l < pyr.size(); ++l) {
+    raw.push_back(extractEdges(pyr[l], params.modelContrast, l == 0));
+    if (l > 0 && raw.back().size() < 8) {
+      raw.pop_back();
+      break;
+    }
+  }
   if (raw[0].size() < 16)
     return fail(Status::BadArgument, fmt::format("shape: the template has only {} edge points of contrast >= {} "
                                                  "(parameter 'model_contrast'); need at least 16",
@@ -138,27 +154,15 @@ Result<Model> buildModel(const cv::Mat& templ, const ShapeParams& params) {
   for (const auto& p : raw[0]) cx += p.x, cy += p.y;
   model.origin = {cx / raw[0].size(), cy / raw[0].size()};  // padded template px
 
-  // Level count: as asked, or the highest level with enough points and size.
-  int levels = params.levels;
-  auto radiusOf = [&](std::size_t l) {
+  for (std::size_t l = 0; l < raw.size(); ++l) {
     const double s = std::ldexp(1.0, -static_cast<int>(l));
-    double r = 0;
-    for (const auto& p : raw[l]) r = std::max(r, std::hypot(p.x - model.origin.u * s, p.y - model.origin.v * s));
-    return r;
-  };
-  if (levels == 0) {
-    levels = 1;
-    for (std::size_t l = 1; l < raw.size(); ++l)
-      if (static_cast<int>(raw[l].size()) >= kMinTopPoints && radiusOf(l) >= kMinTopRadius) levels = static_cast<int>(l) + 1;
-  } else if (levels > static_cast<int>(raw.size()) || static_cast<int>(raw[levels - 1].size()) < 8) {
-    return fail(Status::BadArgument, fmt::format("shape: parameter 'levels': the template is too small for {} levels", levels));
-  }
-
-  for (int l = 0; l < levels; ++l) {
-    const double s = std::ldexp(1.0, -l);
     std::vector<RawPoint> pts = raw[l];
-    // Thin out evenly to maxPoints (level 0 mostly; higher levels have 4x fewer per level).
-    const std::size_t cap = static_cast<std::size_t>(params.maxPoints);
+    // Thin out evenly to maxPoints / 2^l (at least kMinLevelPoints): a level's outline is half
+    // as long as the one below it, so this keeps about one point per 2^l px of it where
+    // the template has many edges (a 450 px gear: 1500, 750, 375, 187, 93 points on levels
+    // 0-4), which is plenty to score a pose and costs 2^l less to track.
+    const std::size_t cap =
+        std::max<std::size_t>(kMinLevelPoints, static_cast<std::size_t>(params.maxPoints) >> std::min<std::size_t>(l, 16));
     if (pts.size() > cap) {
       std::vector<RawPoint> kept;
       kept.reserve(cap);
@@ -179,10 +183,26 @@ Result<Model> buildModel(const cv::Mat& templ, const ShapeParams& params) {
       lm.ny.push_back(p.ny);
       lm.radius = std::max(lm.radius, std::hypot(double{lm.x.back()}, double{lm.y.back()}));
     }
-    lm.angleStep = params.angleStepDeg > 0 ? std::min(params.angleStepDeg * M_PI / 180.0 * std::ldexp(1.0, l), 0.5)
+    lm.angleStep = params.angleStepDeg > 0 ? std::min(params.angleStepDeg * M_PI / 180.0 * std::ldexp(1.0, static_cast<int>(l)), 0.5)
                                            : std::min(1.0 / std::max(lm.radius, 1.0), 0.5);
     model.levels.push_back(std::move(lm));
   }
+
+  // Search levels: as asked, or the highest at which the part at scaleMin is still big enough.
+  const int available = static_cast<int>(model.levels.size());
+  int levels = params.levels;
+  if (levels == 0) {
+    levels = 1;
+    for (int l = 1; l < std::min(available, kMaxLevels); ++l) {
+      const int tl = model.templateLevel(l, scaleMin);
+      const double radius = model.levels[0].radius * scaleMin * std::ldexp(1.0, -l);
+      if (model.levels[tl].size() >= kMinTopPoints && radius >= kMinTopRadius) levels = l + 1;
+    }
+  } else if (levels > available || model.levels[model.templateLevel(levels - 1, scaleMin)].size() < 8) {
+    return fail(Status::BadArgument, fmt::format("shape: parameter 'levels': the template is too small for {} levels{}", levels,
+                                                 scaleMin < 1 ? fmt::format(" at scale {}", scaleMin) : std::string()));
+  }
+  model.searchLevels = levels;
   model.origin.u -= border, model.origin.v -= border;  // template px
   return model;
 }

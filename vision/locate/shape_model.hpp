@@ -25,14 +25,25 @@ struct LevelModel {
 };
 
 struct Model {
-  std::vector<LevelModel> levels;  // [0] = full resolution
+  // Every level of the template's pyramid that has >= 8 edge points ([0] = full resolution);
+  // the search uses levels [0, searchLevels). Levels beyond the search's top serve parts seen
+  // smaller than taught (templateLevel()).
+  std::vector<LevelModel> levels;
+  int searchLevels = 1;
   PixelPoint origin;               // template px of the level-0 origin (the edge points' centroid)
+
+  // The template level whose detail matches image level `level` for a part seen at `scale`
+  // (image px per template px): the part's pixels there are 2^level / scale template px, so
+  // the level round(level + log2(1 / scale)), within [0, levels.size() - 1]. Its points,
+  // times scale * 2^(L - level), are the part's edges at that image level.
+  int templateLevel(int level, double scale) const;
 };
 
-// Builds the model. levels = 0 picks the level count automatically: the highest level whose
-// model still has >= 24 points and a radius >= 8 px (so a 1-px shift at the rim is still
-// an angle step of at most ~7 deg).
-Result<Model> buildModel(const cv::Mat& templ, const ShapeParams& params);
+// Builds the model. levels = 0 picks the level count automatically: the highest level at
+// which the part, at the smallest scale searched (scaleMin, image px per template px), still
+// has >= 24 points and a radius >= 8 px (so a 1-px shift at the rim is still an angle step of
+// at most ~7 deg).
+Result<Model> buildModel(const cv::Mat& templ, const ShapeParams& params, double scaleMin = 1.0);
 
 // Gradient of an 8-bit image as gray levels per pixel: Sobel 3x3 scaled by 1/8 (CV_32F).
 // With smooth = true a Gaussian (sigma 1 px) is applied first: the sub-pixel edge estimator
