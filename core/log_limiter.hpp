@@ -9,6 +9,11 @@
 
 #include <chrono>
 #include <cstdint>
+#include <string>
+#include <string_view>
+#include <utility>
+
+#include "core/log.hpp"
 
 namespace vgr::log {
 
@@ -47,5 +52,22 @@ class LogLimiter {
   std::uint64_t pending_ = 0;
   std::uint64_t heldBackTotal_ = 0;
 };
+
+// One event line through `limiter` under `sub` at info (or warn when `warning`), with
+// "(N more <what> not logged)" appended to the first line after a held-back run; false when
+// this line was held back (the caller counts those where it exposes them).
+template <class... Args>
+bool limitedLog(LogLimiter& limiter, std::string_view sub, std::string_view what, bool warning,
+                fmt::format_string<Args...> f, Args&&... args) {
+  std::uint64_t heldBack = 0;
+  if (!limiter.allow(heldBack)) return false;
+  std::string line = fmt::format(f, std::forward<Args>(args)...);
+  if (heldBack > 0) line += fmt::format(" ({} more {} not logged)", heldBack, what);
+  if (warning)
+    warn(sub, "{}", line);
+  else
+    info(sub, "{}", line);
+  return true;
+}
 
 }  // namespace vgr::log

@@ -1,7 +1,8 @@
 // The commissioning figures vgrd puts on the page (docs/commissioning.md) beside the page's
 // own, through its extension point (WebPage::addStatusSection, /api/status -> sections):
 //   "drift"  the drift monitor's state after the last frame (daemon/drift_monitor.hpp).
-// (The last `vgr repeatability` run is not shown yet: the tool does not record it.)
+// ("repeatability", the last live `vgr repeatability` run, is the page's own: the tool posts
+// it, daemon/repeatability_record.hpp.)
 // Thread: the fill function runs on the I/O thread (the page's status) and takes the
 // monitor's short snapshot lock.
 #pragma once

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <sstream>
 #include <thread>
 #include <vector>
@@ -26,6 +27,7 @@
 #include "daemon/image_archive.hpp"
 #include "daemon/job_locator.hpp"
 #include "daemon/journal.hpp"
+#include "daemon/repeatability_record.hpp"
 #include "daemon/web_server.hpp"
 #include "drivers/camera_worker.hpp"
 #include "vision/overlay.hpp"
@@ -115,6 +117,10 @@ struct WebPage::Impl {
   std::map<std::string, StatusSection> sections;
   std::map<int, vision::OverlayJob> overlayJobs;  // by job id, built at start (read-only after)
   std::vector<CalibFile> calib;                   // read at start (what vgrd loaded)
+  // The last live `vgr repeatability` run (daemon/repeatability_record.hpp); I/O thread.
+  std::string repeatPath;
+  std::optional<RepeatabilityRun> repeat;
+  std::string repeatError;  // the record file at start did not read
 
   // I/O thread.
   std::deque<std::string> recent;  // journal lines, newest first
@@ -354,8 +360,39 @@ struct WebPage::Impl {
       fill(s);
       secs[name] = std::move(s);
     }
+    json rep = json::object();
+    if (repeat) rep = toJson(*repeat);
+    else if (!repeatError.empty()) rep["error"] = repeatError;
+    else rep["state"] = "no run recorded (vgr repeatability records its live runs here)";
+    rep["file"] = repeatPath;
+    secs["repeatability"] = std::move(rep);
     j["sections"] = std::move(secs);
     return j;
+  }
+
+  // POST /api/repeatability: a measurement, not an operator action (web.actions may be off),
+  // from the IPC itself or an address in web.allowed_clients, with the page's header.
+  HttpReply recordRepeatability(const HttpRequest& req) {
+    const bool loopback = req.remote.rfind("127.", 0) == 0 || req.remote == "::1";
+    if (!loopback && !allowed(req.remote)) {
+      log::warn("web", "repeatability record refused: {} is neither loopback nor in web.allowed_clients", req.remote);
+      return errorReply(403, "address " + req.remote + " is neither loopback nor in web.allowed_clients");
+    }
+    if (req.header("x-vgr-action") != "1") return errorReply(403, "missing header 'X-Vgr-Action: 1'");
+    auto run = fromQuery([&req](const std::string& k) { return req.param(k); });
+    if (!run) return errorReply(400, run.error().message);
+    if (src.cell->findJob(run->job) == nullptr) return errorReply(400, fmt::format("job {} is not configured", run->job));
+    run->at = std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+    run->from = req.remote;
+    if (auto w = writeRepeatabilityRecord(repeatPath, *run); !w) {
+      log::warn("web", "repeatability record: {}", w.error().message);
+      return errorReply(500, w.error().message);
+    }
+    repeat = std::move(*run);
+    repeatError.clear();
+    log::info("web", "repeatability run recorded from {}: job {}, {} shots, sigma {:.4f} mm / {:.4f} deg, {}", req.remote,
+              repeat->job, repeat->shots, maxSigmaMm(*repeat), maxSigmaDeg(*repeat), repeat->pass ? "pass" : "FAIL");
+    return jsonReply(200, toJson(*repeat));
   }
 
   HttpReply action(const HttpRequest& req, const std::string& what, const std::function<HttpReply()>& act) const {
@@ -440,6 +477,7 @@ struct WebPage::Impl {
         return jsonReply(200, json{{"default_job", job}});
       });
     });
+    server.routePost("/api/repeatability", [this](const HttpRequest& req) { return recordRepeatability(req); });
     server.websocket("/ws", [this] {
       json st = status("");
       st["type"] = "status";
@@ -463,6 +501,13 @@ void WebPage::start() {
     if (!c.multiHeight.empty()) s.calib.push_back(readCalibFile("multiheight", c.multiHeight));
     for (const auto& [role, path] : {std::pair{"intrinsics", &c.intrinsics}, std::pair{"handeye", &c.handeye}, std::pair{"plane", &c.plane}})
       if (!path->empty()) s.calib.push_back(readCalibFile(role, *path));
+  }
+  s.repeatPath = repeatabilityRecordPath(s.src.cell->journalPath);
+  if (auto r = readRepeatabilityRecord(s.repeatPath); !r) {
+    s.repeatError = r.error().message;
+    log::warn("web", "the last repeatability run is not shown: {}", s.repeatError);
+  } else {
+    s.repeat = std::move(*r);
   }
   s.routes();
   s.stopping = false;

@@ -17,6 +17,11 @@
 //   POST /api/trigger?job=N   operator actions (web.actions, from web.allowed_clients only,
 //   POST /api/job?id=N        with the header X-Vgr-Action: 1): a cycle of job N (0 or none =
 //                             the default job); switch the default job. 403 otherwise.
+//   POST /api/repeatability?...  the figures of a live `vgr repeatability` run (a
+//                             measurement: from loopback or web.allowed_clients, header
+//                             X-Vgr-Action: 1, web.actions not needed); kept in
+//                             <journal folder>/repeatability.json and shown as
+//                             /api/status -> sections.repeatability (repeatability_record.hpp)
 //
 // Cost to the cycle thread (frameDone): one copy of the gray image into a free one of three
 // preallocated buffers (no allocation once warm) and one post of the result to the I/O

@@ -102,17 +102,8 @@ struct ModbusServer::Impl {
   // A connection event through the rate limit (Modbus thread).
   template <class... Args>
   void connLog(bool warning, fmt::format_string<Args...> f, Args&&... args) {
-    std::uint64_t heldBack = 0;
-    if (!connLimiter.allow(heldBack)) {
+    if (!log::limitedLog(connLimiter, "modbus", "connection events", warning, f, std::forward<Args>(args)...))
       ++stats.logLinesHeldBack;
-      return;
-    }
-    std::string line = fmt::format(f, std::forward<Args>(args)...);
-    if (heldBack > 0) line += fmt::format(" ({} more connection events not logged)", heldBack);
-    if (warning)
-      log::warn("modbus", "{}", line);
-    else
-      log::info("modbus", "{}", line);
   }
   std::uint16_t boundPort = 0;
   std::thread thread;

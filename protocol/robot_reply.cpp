@@ -47,8 +47,6 @@ Result<ParsedReply> parseBinaryReply(std::string_view raw, bool withLabel) {
   if (withLabel) {
     p.label = binary::readInt32(raw, 40);
     p.confidence = binary::readInt32(raw, 44) / 1000.0;
-    if (p.label < 0 || p.label > kMaxReplyLabel || !(p.confidence >= 0 && p.confidence <= 1))
-      return fail(Status::BadArgument, "label or confidence out of range");
   }
   p.status = binary::readInt32(raw, 8);
   p.cycle = binary::readInt32(raw, 12);
@@ -74,6 +72,8 @@ Result<ParsedReply> checkCycle(Result<ParsedReply> r) {
     if (!(std::abs(mm) <= kMaxAbsPositionMm + 0.0005)) return fail(Status::BadArgument, "position out of range");
   for (const double deg : {r->rzDeg, r->ryDeg, r->rxDeg})
     if (!(std::abs(deg) <= 180.0005)) return fail(Status::BadArgument, "angle out of range");
+  if (r->label < 0 || r->label > kMaxReplyLabel || !(r->confidence >= 0 && r->confidence <= 1.0))
+    return fail(Status::BadArgument, "label or confidence out of range");
   return r;
 }
 
@@ -133,7 +133,6 @@ Result<ParsedReply> parseTextReply(Dialect dialect, std::string_view raw, const 
   if (lab) {  // v holds the values after status and cycle
     p.label = static_cast<int>(v[poseFields - 2]);
     p.confidence = v[poseFields - 1];
-    if (p.confidence > 1) return fail(Status::BadArgument, "confidence above 1");
   }
   if (quat) {  // mm + q1..q4 (w, x, y, z), unit (5 decimals: within 2e-5) when a pose is sent
     const double n = std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5] + v[6] * v[6]);

@@ -33,8 +33,10 @@ struct ParsedReply {
   // degrees): what a robot program computes its target from (sim/robot/robot_program.hpp).
   // Zeros for abb quaternion replies (no six-number form).
   std::array<double, 6> values{};
-  int label = 0;          // withLabel only
-  double confidence = 0;  // withLabel only, [0, 1]
+  // reply_label replies only (docs/protocols.md): the classifier's label [0, 999] and its
+  // confidence [0, 1] after the pose (binary: the 48-byte frame).
+  int label = 0;
+  double confidence = 0;
 };
 
 // How the endpoint was configured to reply.
@@ -45,7 +47,8 @@ struct ReplyForm {
 
 // The reply, or Status::BadArgument saying what is wrong with it ("does not match the
 // dialect", "longer than 80 characters", "not a 40-byte VGRA frame" (48 with the label), "number out of range",
-// "cycle id out of range": vgrd's cycle ids are in [0, 2^23 - 1]).
+// "cycle id out of range": vgrd's cycle ids are in [0, 2^23 - 1], "label or confidence out
+// of range").
 // Dialect strict has no replies: BadArgument.
 Result<ParsedReply> parseRobotReply(Dialect dialect, std::string_view raw, const ReplyForm& form = {});
 

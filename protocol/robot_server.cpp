@@ -89,17 +89,8 @@ struct ServerCore : std::enable_shared_from_this<ServerCore> {
   // A connection event through the endpoint's rate limit (info, or warn).
   template <class... Args>
   void connLog(bool warning, fmt::format_string<Args...> f, Args&&... args) {
-    std::uint64_t heldBack = 0;
-    if (!connLimiter.allow(heldBack)) {
+    if (!log::limitedLog(connLimiter, "robot", "connection events", warning, f, std::forward<Args>(args)...))
       ++stats.logLinesHeldBack;
-      return;
-    }
-    std::string line = fmt::format(f, std::forward<Args>(args)...);
-    if (heldBack > 0) line += fmt::format(" ({} more connection events not logged)", heldBack);
-    if (warning)
-      log::warn("robot", "{}", line);
-    else
-      log::info("robot", "{}", line);
   }
 
   asio::io_context& io;

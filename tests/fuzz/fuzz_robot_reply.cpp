@@ -2,7 +2,8 @@
 // strict reply checker vgr-sim-robot and `vgr soak` read every reply with. Byte 0's bit 6
 // picks the label form (reply_label), bit 5 abb's quaternion form; two modes by its top bit:
 //   0: raw bytes as a reply of the dialect byte 0 picks (ur, abb, fanuc, binary): accepted
-//      replies have finite numbers and the dialect's size limits;
+//      replies have finite numbers (six degrees of freedom), label and confidence in range
+//      and the dialect's size limits;
 //   1: a reply built from the input bytes (status, cycle, a pose of raw doubles: NaN, inf,
 //      huge) is formatted by vgrd's formatReply() and must be accepted by the checker with
 //      the same status and cycle, and its position within the dialect's rounding: every
@@ -60,7 +61,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     check(r->label >= 0 && r->label <= kMaxReplyLabel && r->confidence >= 0 && r->confidence <= 1);
     check(r->cycle >= 0);
     if (d == Dialect::Abb) check(raw.size() <= kAbbMaxReplyChars);
-    if (d == Dialect::Fanuc) check(raw.size() == kFanucReplyChars + (form.withLabel ? 10 : 0));
+    if (d == Dialect::Fanuc) check(raw.size() == (form.withLabel ? kFanucLabelReplyChars : kFanucReplyChars));
     if (d == Dialect::Binary) check(raw.size() == (form.withLabel ? binary::kLabelReplyBytes : binary::kReplyBytes));
     return 0;
   }

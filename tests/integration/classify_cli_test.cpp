@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "tests/support/command.hpp"
+#include "tests/support/temp_dir_test.hpp"
 
 namespace {
 
@@ -29,20 +30,7 @@ using vgr::test::lastLine;
 const std::string kScene = "--parts 5 --angle-range 180 --noise 6 --blur 0.8 --illum-ratio 1.3 --clutter 2 --width 800 --height 640";
 const std::string kAll = "disc,ring,hex,square,square_small,rect,rect_notch,flat";
 
-class classify_cli : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("vgr-classify-cli-" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override {
-    std::error_code ec;
-    if (!HasFailure()) fs::remove_all(dir_, ec);
-  }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  fs::path dir_;
-};
+class classify_cli : public vgr::test::TempDirTest {};
 
 TEST_F(classify_cli, TrainEvalHeldOutAndLocate) {
   auto r = vgr("sim render --out " + path("train") + " --count 40 --seed 5 --classes " + kAll + " " + kScene);

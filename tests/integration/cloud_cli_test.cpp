@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "tests/support/command.hpp"
+#include "tests/support/temp_dir_test.hpp"
 
 namespace {
 
@@ -23,20 +24,7 @@ using vgr::test::lastLine;
 
 Run vgr(const std::string& args) { return vgr::test::runVgr(args); }
 
-class cloud_cli : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("vgr-cloud-cli-" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override {
-    std::error_code ec;
-    if (!HasFailure()) fs::remove_all(dir_, ec);
-  }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  fs::path dir_;
-};
+class cloud_cli : public vgr::test::TempDirTest {};
 
 TEST_F(cloud_cli, TeachFromModelThenEvalOnA3dDataSet) {
   // Three housing scenes of the kind (640 x 480, clutter, tilt) and one empty one.

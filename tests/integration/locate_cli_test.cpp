@@ -15,6 +15,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include "tests/support/command.hpp"
+#include "tests/support/temp_dir_test.hpp"
 
 namespace {
 
@@ -26,19 +27,7 @@ Run vgr(const std::string& args) { return vgr::test::runVgr(args); }
 
 using vgr::test::lastLine;
 
-class locate_cli : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("vgr-locate-cli-" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override {
-    std::error_code ec;
-    if (!HasFailure()) fs::remove_all(dir_, ec);
-  }
-  fs::path dir_;
-};
+class locate_cli : public vgr::test::TempDirTest {};
 
 TEST_F(locate_cli, RenderTeachLocateEval) {
   const std::string data = (dir_ / "data").string(), job = (dir_ / "job").string();

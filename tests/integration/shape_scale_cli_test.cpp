@@ -17,25 +17,14 @@
 
 #include "sim/shape_scenes.hpp"
 #include "tests/support/command.hpp"
+#include "tests/support/temp_dir_test.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 namespace shapes = vgr::sim::shapes;
 
-class shape_scale_cli : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("vgr-shape-scale-cli-" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override {
-    std::error_code ec;
-    if (!HasFailure()) fs::remove_all(dir_, ec);
-  }
-  fs::path dir_;
-};
+class shape_scale_cli : public vgr::test::TempDirTest {};
 
 std::string slurp(const fs::path& p) {
   std::ifstream in(p);

@@ -21,6 +21,29 @@ RobotReply okReply() {
   return r;
 }
 
+// reply_label replies (the sim robot's check of them, formerly its own parser): label and
+// confidence come back in every dialect that carries them; the plain form is refused as a
+// labelled one and the other way round; a confidence above 1 is not a reply of vgrd's.
+TEST(robot_reply, LabelledRepliesRoundTrip) {
+  RobotReply r = okReply();
+  r.label = 17;
+  r.confidence = 0.875;
+  for (const Dialect d : {Dialect::Ur, Dialect::Abb, Dialect::Fanuc, Dialect::Binary}) {
+    const std::string raw = formatReply(d, r, true);
+    const auto p = parseRobotReply(d, raw, ReplyForm{.withLabel = true});
+    ASSERT_TRUE(p.has_value()) << dialectName(d) << ": " << p.error().message << " " << raw;
+    EXPECT_EQ(p->cycle, 4711);
+    EXPECT_NEAR(p->xMm, 512.3, 0.0011) << dialectName(d);
+    EXPECT_NEAR(p->rzDeg, -12.5, 0.0011) << dialectName(d);
+    EXPECT_EQ(p->label, 17) << dialectName(d);
+    EXPECT_DOUBLE_EQ(p->confidence, 0.875) << dialectName(d);
+    EXPECT_FALSE(parseRobotReply(d, raw, ReplyForm{.withLabel = false})) << dialectName(d);
+    EXPECT_FALSE(parseRobotReply(d, formatReply(d, r, false), ReplyForm{.withLabel = true})) << dialectName(d);
+  }
+  EXPECT_FALSE(parseRobotReply(Dialect::Abb, "0,4711,512.300,-120.050,35.000,-12.500,0.000,0.000,17,1.500", ReplyForm{.withLabel = true}));
+  EXPECT_TRUE(parseRobotReply(Dialect::Abb, "0,4711,512.300,-120.050,35.000,-12.500,0.000,0.000,17,1.000", ReplyForm{.withLabel = true}));
+}
+
 TEST(robot_reply, EveryDialectRoundTrips) {
   for (const Dialect d : {Dialect::Ur, Dialect::Abb, Dialect::Fanuc, Dialect::Binary}) {
     const auto p = parseRobotReply(d, formatReply(d, okReply()));

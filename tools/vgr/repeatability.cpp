@@ -7,6 +7,11 @@
 #include <cstdio>
 #include <thread>
 
+#include <netdb.h>
+#include <sys/socket.h>
+#include <sys/time.h>
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
 #include <modbus.h>
@@ -15,6 +20,7 @@
 #include "config/cell_config.hpp"
 #include "core/angles.hpp"
 #include "daemon/cell_mapping.hpp"
+#include "daemon/repeatability_record.hpp"
 #include "protocol/modbus_map.hpp"
 #include "tools/vgr/cell_frames.hpp"
 
@@ -109,9 +115,7 @@ Result<std::vector<Shot>> triggerLive(const config::CellConfig& cell, int job, i
   return out;
 }
 
-struct Spread {
-  double mean = 0, sigma = 0, range = 0;
-};
+using Spread = daemon::AxisSpread;
 
 Spread spread(std::vector<double> v, bool angle) {
   Spread s;
@@ -128,6 +132,53 @@ Spread spread(std::vector<double> v, bool angle) {
   s.range = *hi - *lo;
   if (angle) s.mean = normaliseDeg(s.mean);
   return s;
+}
+
+// Hands a live run's figures to vgrd for its page (daemon/repeatability_record.hpp): one
+// HTTP/1.1 POST with an empty body over a plain socket. Written here rather than with Beast:
+// the request is one fixed line and the reply's status line is all we read, and Beast's
+// headers would cost the vgr tool a heavy translation unit (STYLE.md).
+Result<void> postRecord(const config::WebConfig& web, const daemon::RepeatabilityRun& run) {
+  std::string host = web.bind;
+  if (host == "0.0.0.0") host = "127.0.0.1";
+  if (host == "::") host = "::1";
+  addrinfo hints{};
+  hints.ai_socktype = SOCK_STREAM;
+  hints.ai_flags = AI_NUMERICHOST | AI_NUMERICSERV;
+  addrinfo* ai = nullptr;
+  if (getaddrinfo(host.c_str(), std::to_string(web.port).c_str(), &hints, &ai) != 0 || !ai)
+    return fail(Status::BadArgument, "web.bind " + web.bind + " is not a numeric address");
+  const int fd = ::socket(ai->ai_family, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  struct Close {
+    int fd;
+    addrinfo* ai;
+    ~Close() {
+      if (fd >= 0) ::close(fd);
+      freeaddrinfo(ai);
+    }
+  } guard{fd, ai};
+  if (fd < 0) return fail(Status::Internal, "socket() failed");
+  timeval tv{5, 0};
+  ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+  ::setsockopt(fd, SOL_SOCKET, SO_SNDTIMEO, &tv, sizeof tv);
+  const std::string where = fmt::format("vgrd's web server at {}:{}", host, web.port);
+  if (::connect(fd, ai->ai_addr, ai->ai_addrlen) != 0) return fail(Status::CameraError, "cannot reach " + where);
+  const std::string req = fmt::format(
+      "POST /api/repeatability?{} HTTP/1.1\r\nHost: {}\r\nX-Vgr-Action: 1\r\nContent-Length: 0\r\nConnection: close\r\n\r\n",
+      daemon::toQuery(run), host);
+  for (std::size_t sent = 0; sent < req.size();) {
+    const ssize_t n = ::send(fd, req.data() + sent, req.size() - sent, MSG_NOSIGNAL);
+    if (n <= 0) return fail(Status::Internal, "sending to " + where + " failed");
+    sent += static_cast<std::size_t>(n);
+  }
+  std::string reply;
+  char buf[4096];
+  for (ssize_t n; reply.size() < 65536 && (n = ::recv(fd, buf, sizeof buf, 0)) > 0;) reply.append(buf, static_cast<std::size_t>(n));
+  if (reply.rfind("HTTP/1.1 200", 0) == 0) return {};
+  const auto body = reply.find("\r\n\r\n");
+  const std::string why = reply.empty() ? "no reply" : reply.substr(0, reply.find("\r\n")) +
+                                                         (body == std::string::npos ? "" : ": " + reply.substr(body + 4));
+  return fail(Status::Internal, where + " did not take it: " + why);
 }
 
 }  // namespace
@@ -188,6 +239,33 @@ int runRepeatability(const RepeatabilityOptions& o) {
   const bool overBar = (o.maxSigmaMm > 0 && sigmaMm > o.maxSigmaMm) || (o.maxSigmaDeg > 0 && sigmaDeg > o.maxSigmaDeg);
   const bool pass = failures.empty() && !tooFew && !overBar;
 
+  // A live run goes on the cell's page (vgrd keeps it beside its journal).
+  std::string recorded;      // where, or why not ("": replay or --no-record)
+  bool recordOk = false;
+  bool recordFailed = false;  // the cell has a page and vgrd did not take the run
+  if (o.images.empty() && o.record) {
+    if (!cfg->web.enabled || !cfg->web.page) {
+      recorded = "not recorded: the cell has no page (web.enabled / web.page false)";
+    } else {
+      daemon::RepeatabilityRun run;
+      run.job = job;
+      run.shots = total;
+      run.found = static_cast<int>(shots.size());
+      run.failed = static_cast<int>(failures.size());
+      for (std::size_t k = 0; k < 6; ++k) run.axes[k] = {s[k].mean, s[k].sigma, s[k].range};
+      run.barMm = o.maxSigmaMm;
+      run.barDeg = o.maxSigmaDeg;
+      run.pass = pass;
+      if (auto r = postRecord(cfg->web, run); r) {
+        recorded = fmt::format("recorded on the cell's page (http://{}:{}/)", cfg->web.bind, cfg->web.port);
+        recordOk = true;
+      } else {
+        recorded = "NOT recorded on the page: " + r.error().message + " (--no-record measures only)";
+        recordFailed = true;
+      }
+    }
+  }
+
   if (o.json) {
     nlohmann::ordered_json j{{"source", o.images.empty() ? "live" : "replay"}, {"job", job}, {"shots", total},
                              {"found", shots.size()}, {"failed", failures.size()}};
@@ -198,6 +276,8 @@ int runRepeatability(const RepeatabilityOptions& o) {
     for (const auto& x : failures) f.push_back({{"shot", x.shot}, {"what", x.what}});
     j["failures"] = f;
     j["pass"] = pass;
+    if (!recorded.empty()) j["recorded"] = recordOk;
+    if (recordFailed) std::fprintf(stderr, "vgr repeatability: %s\n", recorded.c_str());
     std::printf("%s\n", j.dump().c_str());
   } else {
     std::printf("vgr repeatability: job %d, %s; %zu of %d with a part\n", job, source.c_str(), shots.size(), total);
@@ -209,8 +289,9 @@ int runRepeatability(const RepeatabilityOptions& o) {
       std::printf("FAIL: sigma %.4f mm / %.4f deg above the bar %g mm / %g deg\n", sigmaMm, sigmaDeg, o.maxSigmaMm, o.maxSigmaDeg);
     if (!failures.empty()) std::printf("FAIL: %zu shot(s) delivered no part: a still part must be found every time\n", failures.size());
     if (tooFew && failures.empty()) std::printf("FAIL: fewer than 2 shots\n");
+    if (!recorded.empty()) std::printf("%s\n", recorded.c_str());
   }
-  return pass ? 0 : 1;
+  return pass && !recordFailed ? 0 : 1;
 }
 
 CLI::App* RepeatabilityCommand::add(CLI::App& parent) {
@@ -224,6 +305,9 @@ CLI::App* RepeatabilityCommand::add(CLI::App& parent) {
   c->add_option("--max-sigma-mm", r.maxSigmaMm, "fail (exit 1) when sigma of x, y or z is above this")->check(CLI::PositiveNumber);
   c->add_option("--max-sigma-deg", r.maxSigmaDeg, "fail (exit 1) when sigma of an angle is above this")->check(CLI::PositiveNumber);
   c->add_flag("--json", r.json, "one JSON line");
+  c->add_flag("!--no-record", r.record,
+              "live: do not hand the figures to vgrd's page (by default they are, when the cell has a page; "
+              "failing to is exit 1)");
   return c;
 }
 

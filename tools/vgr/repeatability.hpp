@@ -7,6 +7,8 @@
 //     the PLC reads (float32 X..R3) once RESULT_VALID comes with RESULT_ID = ACQ_ID;
 //   --images GLOB: the cycle's locate + map steps in-process on recorded frames of the
 //     still part (vgr grab --save), exactly as vgrd maps them.
+// A live run's figures go to vgrd's commissioning page (POST /api/repeatability, kept beside
+// the journal; --no-record: measure only); a cell without a page says so.
 // Exit: 0 measured (and within --max-sigma-mm / --max-sigma-deg when given), 1 a shot
 // found no part or ended in an error, or the spread is above the bar; 2 bad input.
 #pragma once
@@ -27,6 +29,7 @@ struct RepeatabilityOptions {
   double maxSigmaMm = 0;            // > 0: exit 1 when sigma of x, y or z exceeds it
   double maxSigmaDeg = 0;           // > 0: exit 1 when sigma of an angle exceeds it
   bool json = false;
+  bool record = true;               // live: post the figures to vgrd's page (daemon/repeatability_record.hpp)
 };
 
 int runRepeatability(const RepeatabilityOptions& o);
