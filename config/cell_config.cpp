@@ -623,6 +623,8 @@ CellConfig parse(const YAML::Node& root, const std::string& file) {
     parseCalibration(Section(file, cal, "calibration"), c.calibration, cal, file);
   }
   parseWeb(Section(file, top.get("web"), "web"), c.web);
+  if (c.web.enabled && ports.contains(c.web.port))  // vgrd binds it next to the robots' and Modbus ports
+    top.fail(top.get("web")["port"], "web.port", "port already used by another endpoint");
   parseMqtt(Section(file, top.get("mqtt"), "mqtt"), c.mqtt);
   parseArchive(Section(file, top.get("archive"), "archive"), c.archive, file);
   top.finish();

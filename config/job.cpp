@@ -134,6 +134,15 @@ JobFile parse(const YAML::Node& root, const std::string& file, const std::string
   j.taught.searchRoi.y = roi.integer("y", 0, 0, 65535);
   j.taught.searchRoi.width = roi.integer("width", 0, 0, 65535);
   j.taught.searchRoi.height = roi.integer("height", 0, 0, 65535);
+  {  // 0 x 0 at 0,0 is the whole image; anything else a rectangle, not silently the whole image
+    const PixelRect& r = j.taught.searchRoi;
+    if ((r.width == 0) != (r.height == 0))
+      roi.fail(roi.get(r.width == 0 ? "width" : "height"), r.width == 0 ? "width" : "height",
+               "width and height are both 0 (the whole image) or both > 0");
+    if (r.width == 0 && (r.x != 0 || r.y != 0))
+      roi.fail(roi.get(r.x != 0 ? "x" : "y"), r.x != 0 ? "x" : "y",
+               "an offset needs width and height (0 x 0 searches the whole image)");
+  }
   roi.finish(Section::UnknownKeys::Plain);
 
   j.taught.minScore = top.number("min_score", j.taught.minScore, 0, 1);

@@ -9,21 +9,26 @@
 #include <fmt/format.h>
 
 #include "daemon/cell_mapping.hpp"
+#include "daemon/image_archive.hpp"
 #include "daemon/job_locator.hpp"
+#include "daemon/mqtt_sink.hpp"
+#include "drivers/camera.hpp"
 #include "vision/calib/check_file.hpp"
 
 namespace vgr::daemon {
 namespace {
 
-// What Journal::open does (create the folders, open for append), checked without creating
-// anything: the file writable if it exists, else the nearest existing folder above it.
-std::string journalProblem(const std::string& path) {
+// What vgrd's start does with a path it writes (Journal::open: create the folders, open the
+// file for append; ImageArchive::start: create the folder), checked without creating
+// anything: the path writable if it exists (a file, or a folder for `folder`), else the
+// nearest existing folder above it.
+std::string writableProblem(const std::string& path, bool folder) {
   namespace fs = std::filesystem;
   std::error_code ec;
   const fs::path p(path);
   if (fs::exists(p, ec)) {
-    if (fs::is_directory(p, ec)) return "is a folder";
-    return ::access(path.c_str(), W_OK) == 0 ? "" : "is not writable";
+    if (fs::is_directory(p, ec) != folder) return folder ? "is not a folder" : "is a folder";
+    return ::access(path.c_str(), folder ? W_OK | X_OK : W_OK) == 0 ? "" : "is not writable";
   }
   fs::path dir = p.parent_path();
   if (dir.empty()) dir = ".";
@@ -56,7 +61,23 @@ CheckResult checkCellConfig(const std::string& path) {
   for (const auto& job : cfg->jobs)
     if (auto loc = makeJobLocator(job); !loc) return problem(loc.error().message);
   // The calibration vgrd maps with: files present, consistent and within their residual limits.
-  if (auto m = makeCellMapping(*cfg); !m) return problem("calibration: " + m.error().message);
+  auto mapping = makeCellMapping(*cfg);
+  if (!mapping) return problem("calibration: " + mapping.error().message);
+  // A camera ROI fixes the frame size: a calibration for another size answers every cycle
+  // -6 (CycleRunner's size check). Without both ROI sizes the size is the sensor's: unknown here.
+  if (const auto size = (*mapping)->imageSize(); size && cfg->camera.roiWidth > 0 && cfg->camera.roiHeight > 0 &&
+                                                 (size->width != cfg->camera.roiWidth || size->height != cfg->camera.roiHeight))
+    return problem(fmt::format("key 'camera.roi': the camera delivers {}x{} px, the calibration is for {}x{} px",
+                               cfg->camera.roiWidth, cfg->camera.roiHeight, size->width, size->height));
+  // A replay camera's folder, read as the camera worker's open() reads it (an Aravis camera
+  // is not opened: the check opens no camera on the network).
+  if (cfg->camera.driver == "replay") {
+    auto cam = drivers::makeCamera(cfg->camera);
+    if (!cam) return problem(cam.error().message);
+    auto opened = (*cam)->open();
+    (*cam)->close();
+    if (!opened) return problem(opened.error().message);
+  }
   // The check targets (vgr calibrate verify, the drift monitor): the file loads, names a job
   // of the cell, and has the fiducial the drift monitor watches.
   if (!cfg->calibration.check.empty()) {
@@ -69,8 +90,16 @@ CheckResult checkCellConfig(const std::string& path) {
       return problem(fmt::format("key 'calibration.check': {}: part.job {} is not a job of this cell", cfg->calibration.check,
                                  check->part.job));
   }
-  if (const std::string why = journalProblem(cfg->journalPath); !why.empty())
+  if (const std::string why = writableProblem(cfg->journalPath, false); !why.empty())
     return problem(fmt::format("key 'cell.journal': journal {} {}", cfg->journalPath, why));
+  if (cfg->archive.enabled) {
+    const std::string dir = archiveDir(*cfg);
+    if (const std::string why = writableProblem(dir, true); !why.empty())
+      return problem(fmt::format("key 'archive.dir': archive folder {} {}", dir, why));
+  }
+  // The MQTT sink's setup as its start() does it (libmosquitto opens the TLS files).
+  if (cfg->mqtt.enabled)
+    if (auto r = MqttSink(cfg->mqtt, cfg->name, "").checkSetup(); !r) return problem("key 'mqtt.tls': " + r.error().message);
   for (std::size_t i = 0; i < cfg->robots.size(); ++i)
     if (const std::string why = resolveProblem(cfg->robots[i].bind); !why.empty())
       return problem(fmt::format("key 'robots[{}].bind': '{}' does not resolve: {}", i, cfg->robots[i].bind, why));

@@ -83,6 +83,11 @@ std::string archiveStem(std::uint32_t cycleId, std::chrono::system_clock::time_p
                      tm.tm_min, tm.tm_sec, static_cast<int>(ms % 1000), cycleId);
 }
 
+std::string archiveDir(const config::CellConfig& cell) {
+  if (!cell.archive.dir.empty()) return cell.archive.dir;
+  return (fs::path(cell.journalPath).parent_path() / "archive").string();
+}
+
 bool isArchiveName(const std::string& name, const std::string& ext) {
   static const std::regex stem(R"(\d{8}-\d{6}\.\d{3}-c\d{1,7})");
   if (ext.empty()) return std::regex_match(name, stem);

@@ -48,6 +48,8 @@ std::string archiveStem(std::uint32_t cycleId, std::chrono::system_clock::time_p
 // True for a name archiveStem() can have made, plus ".png" or ".json" when `ext` is given
 // (the web server serves only such names: no path can be smuggled in).
 bool isArchiveName(const std::string& name, const std::string& ext);
+// The folder vgrd archives into: archive.dir, else "archive" next to the journal.
+std::string archiveDir(const config::CellConfig& cell);
 
 struct ArchiveCounters {
   std::uint64_t written = 0;      // frames written (PNG + journal line)

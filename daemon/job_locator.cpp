@@ -13,8 +13,9 @@
 namespace vgr::daemon {
 
 Result<std::unique_ptr<vision::Locator>> makeJobLocator(const config::JobFile& job, std::string_view method) {
-  const cv::Mat templ = vision::readGray8(job.templatePath()).value_or(cv::Mat());
-  if (templ.empty()) return fail(Status::BadArgument, job.templatePath() + ": cannot read the template image");
+  auto read = vision::readGray8(job.templatePath());
+  if (!read) return fail(Status::BadArgument, "the template image: " + read.error().message);
+  const cv::Mat templ = *read;
   auto locator = vision::makeLocator(method.empty() ? std::string_view(job.method) : method, templ, job.taught);
   if (!locator || job.classify.model.empty()) return locator;
   auto classifier = vision::classify::PartClassifier::load(job.classifierPath());

@@ -27,6 +27,49 @@ MqttSink::~MqttSink() {
   if (mosq_ != nullptr) mosquitto_destroy(mosq_);
 }
 
+Result<void> MqttSink::setUp(mosquitto* mosq) const {
+  const std::string broker = "MQTT broker " + cfg_.host + ":" + std::to_string(cfg_.port);
+  auto check = [&](int rc, const std::string& what) -> Result<void> {
+    if (rc == MOSQ_ERR_SUCCESS) return {};
+    return fail(Status::BadArgument, broker + ": " + what + ": " + mosquitto_strerror(rc));
+  };
+  const std::string will = offlinePayload();
+  if (auto r = check(mosquitto_will_set(mosq, statusTopic().c_str(), static_cast<int>(will.size()), will.data(), 1, true),
+                     "will");
+      !r)
+    return r;
+  if (!cfg_.username.empty()) {
+    if (auto r = check(mosquitto_username_pw_set(mosq, cfg_.username.c_str(),
+                                                 cfg_.password.empty() ? nullptr : cfg_.password.c_str()),
+                       "username/password");
+        !r)
+      return r;
+  }
+  if (!cfg_.tlsCaFile.empty()) {
+    // libmosquitto opens each file here and says only "invalid arguments": name them all.
+    std::string files = "TLS files (ca_file " + cfg_.tlsCaFile;
+    if (!cfg_.tlsCertFile.empty()) files += ", cert_file " + cfg_.tlsCertFile + ", key_file " + cfg_.tlsKeyFile;
+    files += ")";
+    if (auto r = check(mosquitto_tls_set(mosq, cfg_.tlsCaFile.c_str(), nullptr,
+                                         cfg_.tlsCertFile.empty() ? nullptr : cfg_.tlsCertFile.c_str(),
+                                         cfg_.tlsKeyFile.empty() ? nullptr : cfg_.tlsKeyFile.c_str(), nullptr),
+                       files + " missing or unreadable");
+        !r)
+      return r;
+    mosquitto_tls_insecure_set(mosq, cfg_.tlsInsecure);
+  }
+  return {};
+}
+
+Result<void> MqttSink::checkSetup() const {
+  std::call_once(libInit, [] { mosquitto_lib_init(); });
+  mosquitto* mosq = mosquitto_new(nullptr, true, nullptr);
+  if (mosq == nullptr) return fail(Status::Internal, "MQTT: mosquitto_new failed");
+  auto r = setUp(mosq);
+  mosquitto_destroy(mosq);
+  return r;
+}
+
 Result<void> MqttSink::start() {
   std::call_once(libInit, [] { mosquitto_lib_init(); });
   const std::string broker = "MQTT broker " + cfg_.host + ":" + std::to_string(cfg_.port);
@@ -37,31 +80,11 @@ Result<void> MqttSink::start() {
   mosquitto_connect_callback_set(mosq_, &MqttSink::onConnect);
   mosquitto_disconnect_callback_set(mosq_, &MqttSink::onDisconnect);
   mosquitto_publish_callback_set(mosq_, &MqttSink::onPublish);
-  const std::string will = offlinePayload();
+  if (auto r = setUp(mosq_); !r) return r;
   auto check = [&](int rc, const char* what) -> Result<void> {
     if (rc == MOSQ_ERR_SUCCESS) return {};
     return fail(Status::BadArgument, broker + ": " + what + ": " + mosquitto_strerror(rc));
   };
-  if (auto r = check(mosquitto_will_set(mosq_, statusTopic().c_str(), static_cast<int>(will.size()), will.data(), 1, true),
-                     "will");
-      !r)
-    return r;
-  if (!cfg_.username.empty()) {
-    if (auto r = check(mosquitto_username_pw_set(mosq_, cfg_.username.c_str(),
-                                                 cfg_.password.empty() ? nullptr : cfg_.password.c_str()),
-                       "username/password");
-        !r)
-      return r;
-  }
-  if (!cfg_.tlsCaFile.empty()) {
-    if (auto r = check(mosquitto_tls_set(mosq_, cfg_.tlsCaFile.c_str(), nullptr,
-                                         cfg_.tlsCertFile.empty() ? nullptr : cfg_.tlsCertFile.c_str(),
-                                         cfg_.tlsKeyFile.empty() ? nullptr : cfg_.tlsKeyFile.c_str(), nullptr),
-                       "TLS files");
-        !r)
-      return r;
-    mosquitto_tls_insecure_set(mosq_, cfg_.tlsInsecure);
-  }
   mosquitto_reconnect_delay_set(mosq_, static_cast<unsigned>(cfg_.reconnectMinS), static_cast<unsigned>(cfg_.reconnectMaxS),
                                 true);
   // Unreachable now is not fatal: the network thread keeps reconnecting with back-off.

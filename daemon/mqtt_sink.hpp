@@ -57,6 +57,9 @@ class MqttSink {
   // Sets the will, TLS and credentials, starts connecting and the network thread. Errors
   // (bad TLS files, no memory) name the broker.
   Result<void> start();
+  // What start() sets up (will, credentials, TLS files: libmosquitto opens the files),
+  // on a handle that never connects; for `vgrd --check`. Errors as start()'s.
+  Result<void> checkSetup() const;
   // Publishes the retained "offline" status, disconnects and joins the network thread.
   void stop();
 
@@ -74,6 +77,7 @@ class MqttSink {
   static void onConnect(mosquitto*, void* self, int rc);
   static void onDisconnect(mosquitto*, void* self, int rc);
   static void onPublish(mosquitto*, void* self, int mid);
+  Result<void> setUp(mosquitto* mosq) const;  // will, credentials, TLS (start() and checkSetup())
   void drainLocked();
   void publishStatusLocked();
 

@@ -288,10 +288,7 @@ Result<void> VgrdApp::start() {
   }
 
   if (s.cfg.archive.enabled) {
-    const std::string dir = s.cfg.archive.dir.empty()
-                                ? (std::filesystem::path(s.cfg.journalPath).parent_path() / "archive").string()
-                                : s.cfg.archive.dir;
-    s.archive = std::make_unique<ImageArchive>(s.cfg.archive, dir);
+    s.archive = std::make_unique<ImageArchive>(s.cfg.archive, archiveDir(s.cfg));
     if (auto r = s.archive->start(); !r) return r;
   }
 

@@ -1,5 +1,7 @@
 #include "vision/gray_image.hpp"
 
+#include <string>
+
 #include <opencv2/imgcodecs.hpp>
 
 namespace vgr::vision {
@@ -26,6 +28,16 @@ Result<cv::Mat> readGray8(const std::string& path) {
   if (m.empty()) return fail(Status::BadArgument, path + ": cannot read the image");
   if (m.depth() == CV_8U) return m;
   if (m.depth() != CV_16U) return fail(Status::BadArgument, path + ": expected an 8- or 16-bit gray image");
+  // Full range means a frame of any brightness reaches above 1/16 of it. Every sample below
+  // 4096 is LSB-aligned Mono10/12 data (another tool's save): read as full range it would be
+  // black (at most 16 of 255) and nothing found, with no word why.
+  double hi = 0;
+  cv::minMaxLoc(m, nullptr, &hi);
+  if (hi < 4096)
+    return fail(Status::BadArgument,
+                path + ": a 16-bit image whose samples all lie in 0.." + std::to_string(static_cast<int>(hi)) +
+                    " (<= 4095): LSB-aligned Mono10/12 samples, not the full-range 16 bits vgr reads (vgr grab --save "
+                    "writes them so); scale it by 2^(16 - bits) first");
   cv::Mat gray8;
   toGray8(m, 16, gray8);
   return gray8;

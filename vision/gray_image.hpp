@@ -28,7 +28,9 @@ void toGray8(const cv::Mat& samples, int bitDepth, cv::Mat& gray8);
 cv::Mat toFullRange16(const cv::Mat& samples, int bitDepth);
 
 // An image file as 8-bit gray: an 8-bit file as it is (colour converted to gray), a 16-bit
-// one as full-range samples (toGray8 with bitDepth 16). Error: "PATH: cannot read the image".
+// one as full-range samples (toGray8 with bitDepth 16). Errors name the file: "PATH: cannot
+// read the image"; a 16-bit image with every sample below 4096 (LSB-aligned Mono10/12, which
+// full-range reading would turn black) is refused with the reason.
 Result<cv::Mat> readGray8(const std::string& path);
 
 }  // namespace vgr::vision

@@ -5,6 +5,8 @@
 #include <unistd.h>
 
 #include <array>
+#include <cmath>
+#include <map>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -14,6 +16,9 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include "config/cell_config.hpp"
+#include "config/job.hpp"
+#include "vision/gray_image.hpp"
 #include "tests/support/command.hpp"
 #include "tests/support/temp_dir_test.hpp"
 
@@ -102,6 +107,138 @@ TEST_F(locate_cli, BadInputIsNamed) {
   r = vgr("locate --job " + (dir_ / "nojob").string() + " --image x.png --json");
   EXPECT_EQ(r.exitCode, 2);
   EXPECT_NE(r.out.find("nojob/job.yaml: cannot open the job file"), std::string::npos) << r.out;
+}
+
+// Issue 18 item 7: `vgr locate` maps pixels as vgrd does. A job's `calibration` names a cell
+// config; when that cell has calibration files, they map (daemon/cell_mapping.hpp), not its
+// pinhole `model`, and the model may be left out. The example cell's files were calibrated on
+// the simulated camera whose truth is the example's model, so a part's pose through the files
+// agrees with the pose through the true model within the calibration's accuracy (0.03 mm
+// measured here; bound 0.5 mm, vgrd's own bound in calib_vgrd_test), while a model knocked
+// 100 mm off must change nothing.
+TEST_F(locate_cli, MapsWithTheCellsCalibrationFilesAsVgrdDoes) {
+  const std::string data = (dir_ / "data").string(), job = (dir_ / "job").string();
+  auto r = vgr("sim render --out " + data + " --count 1 --seed 3 --part flat");  // the example cell's camera, 1280x1024
+  ASSERT_EQ(r.exitCode, 0) << r.out;
+  std::ifstream ty(dir_ / "data" / "template.yaml");
+  std::string line, grasp;
+  while (std::getline(ty, line))
+    if (line.rfind("# Teach a job on it:", 0) == 0) grasp = line.substr(line.find("--grasp ") + 8, line.find(" --regions") - line.find("--grasp ") - 8);
+  ASSERT_FALSE(grasp.empty());
+  r = vgr("teach --image " + data + "/template.png --grasp " + grasp + " --method hu --out " + job);
+  ASSERT_EQ(r.exitCode, 0) << r.out;
+
+  // Three cells (the example's calibration files beside each): true model only; files + a
+  // model 100 mm off; files and no model.
+  const std::string example = vgr::config::embeddedSimCellYaml();
+  const auto cut = [&](std::string yaml, const std::string& from, const std::string& to) {
+    const auto a = yaml.find(from), b = yaml.find(to);
+    EXPECT_NE(a, std::string::npos);
+    EXPECT_NE(b, std::string::npos);
+    return yaml.erase(a, b - a);
+  };
+  std::string offModel = example;
+  offModel.replace(offModel.find("camera_x_mm: 400.0"), 18, "camera_x_mm: 500.0");
+  std::map<std::string, std::string> cells = {{"model", cut(example, "calibration:\n", "modbus:\n")},
+                                              {"files+off-model", offModel},
+                                              {"files", cut(example, "model:\n", "calibration:\n")},
+                                              {"off-model", cut(offModel, "calibration:\n", "modbus:\n")}};
+  std::map<std::string, nlohmann::json> part;
+  for (const auto& [name, yaml] : cells) {
+    auto cfg = vgr::config::writeSimCell((dir_ / name).string(), yaml);
+    ASSERT_TRUE(cfg.has_value()) << cfg.error().message;
+    vgr::config::JobFile j = *vgr::config::loadJob(job);
+    j.calibration = *cfg;
+    ASSERT_TRUE(vgr::config::writeJob(j).has_value());
+    r = vgr("locate --job " + job + " --image " + data + "/img_00000.png --json");
+    ASSERT_EQ(r.exitCode, 0) << name << ": " << r.out;
+    const auto out = nlohmann::json::parse(r.out);
+    ASSERT_EQ(out["parts"].size(), 1u) << name << ": " << r.out;
+    part[name] = out["parts"][0];
+    ASSERT_TRUE(part[name].contains("x_mm")) << name << ": " << r.out;
+  }
+  const auto dist = [&](const std::string& a, const std::string& b) {
+    return std::hypot(part[a]["x_mm"].get<double>() - part[b]["x_mm"].get<double>(),
+                      part[a]["y_mm"].get<double>() - part[b]["y_mm"].get<double>());
+  };
+  EXPECT_LT(dist("files+off-model", "model"), 0.5) << part["files+off-model"].dump() << " vs " << part["model"].dump();
+  EXPECT_LT(dist("files", "model"), 0.5) << part["files"].dump();
+  EXPECT_GT(dist("off-model", "model"), 50.0);  // the test can tell a model mapping from the files' one
+}
+
+// Issue 18 item 8 as the user meets it: an image the job cannot search (smaller than the
+// template, or the job's ROI wholly outside it) is bad input: exit 2 and the reason, not
+// exit 1 ("nothing found") or "expected a non-empty 8-bit gray image".
+TEST_F(locate_cli, AnImageTheJobCannotSearchIsBadInput) {
+  const std::string data = (dir_ / "data").string(), small = (dir_ / "small").string(), job = (dir_ / "job").string();
+  auto r = vgr("sim render --out " + data + " --count 1 --seed 2 --part flat --width 640 --height 512 --focal 1000");
+  ASSERT_EQ(r.exitCode, 0) << r.out;
+  r = vgr("sim render --out " + small + " --count 1 --seed 2 --part flat --width 100 --height 80 --focal 100");
+  ASSERT_EQ(r.exitCode, 0) << r.out;
+  for (const char* method : {"hu", "shape"}) {
+    r = vgr("teach --image " + data + "/template.png --grasp 50,50 --method " + std::string(method) + " --out " + job);
+    ASSERT_EQ(r.exitCode, 0) << r.out;
+    r = vgr("locate --job " + job + " --image " + small + "/img_00000.png --json");
+    EXPECT_EQ(r.exitCode, 2) << method << ": " << r.out;
+    EXPECT_NE(r.out.find("smaller than the"), std::string::npos) << r.out;
+    r = vgr("teach --image " + data + "/template.png --grasp 50,50 --roi 5000,5000,100,100 --method " + std::string(method) +
+            " --out " + job);
+    ASSERT_EQ(r.exitCode, 0) << r.out;
+    r = vgr("locate --job " + job + " --image " + data + "/img_00000.png --json");
+    EXPECT_EQ(r.exitCode, 2) << method << ": " << r.out;
+    EXPECT_NE(r.out.find("lies outside the 640x512 px image"), std::string::npos) << r.out;
+    fs::remove_all(job);
+  }
+}
+
+// Output paths are checked before the work starts (issue 18 item 6's rule, for the tools
+// that write pictures): `vgr eval --plot` into a folder that does not exist used to fail only
+// after every image was evaluated (the run lost, its JSON never printed). The data set has
+// an unreadable image, which an evaluation names on stderr: no such line may appear.
+TEST_F(locate_cli, OutputPathsAreCheckedBeforeTheWork) {
+  const std::string data = (dir_ / "data").string(), job = (dir_ / "job").string();
+  auto r = vgr("sim render --out " + data + " --count 2 --seed 5 --part flat --width 640 --height 512 --focal 1000");
+  ASSERT_EQ(r.exitCode, 0) << r.out;
+  r = vgr("teach --image " + data + "/template.png --grasp 50,50 --method hu --out " + job);
+  ASSERT_EQ(r.exitCode, 0) << r.out;
+  std::ofstream(dir_ / "data" / "img_00001.png") << "not an image";
+  const std::string plot = (dir_ / "no-such-folder" / "plot.png").string();
+  r = vgr("eval --job " + job + " --dataset " + data + " --plot " + plot + " --json");
+  EXPECT_EQ(r.exitCode, 2) << r.out;
+  EXPECT_NE(r.out.find("--plot " + plot + ": the folder"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("left out"), std::string::npos) << "the data set was evaluated before the plot path was checked\n" << r.out;
+  r = vgr("eval --job " + job + " --dataset " + data + " --plot " + (dir_ / "plot.txt").string() + " --json");
+  EXPECT_EQ(r.exitCode, 2) << r.out;
+  EXPECT_EQ(r.out.find("left out"), std::string::npos) << r.out;
+
+  const std::string overlay = (dir_ / "no-such-folder" / "o.png").string();
+  r = vgr("locate --job " + job + " --image " + data + "/img_00000.png --overlay " + overlay + " --json");
+  EXPECT_EQ(r.exitCode, 2) << r.out;
+  EXPECT_NE(r.out.find("--overlay " + overlay + ": the folder"), std::string::npos) << r.out;
+}
+
+// Issue 18 item 2 as the user meets it: a Mono12 frame saved full-range (as vgr grab --save
+// writes it) is located like the 8-bit image; the same frame saved LSB-aligned (0..4095, by
+// another tool) used to be read as a nearly black image (gray 0..16) and located on those 17
+// levels (exit 0 here; other images and methods: no part) with no word why.
+TEST_F(locate_cli, SixteenBitFramesAreLocatedOrRefusedNeverReadBlack) {
+  const std::string data = (dir_ / "data").string(), job = (dir_ / "job").string();
+  auto r = vgr("sim render --out " + data + " --count 1 --seed 6 --part flat --width 640 --height 512 --focal 1000");
+  ASSERT_EQ(r.exitCode, 0) << r.out;
+  r = vgr("teach --image " + data + "/template.png --grasp 50,50 --method hu --out " + job);
+  ASSERT_EQ(r.exitCode, 0) << r.out;
+  const cv::Mat gray = cv::imread(data + "/img_00000.png", cv::IMREAD_GRAYSCALE);
+  ASSERT_FALSE(gray.empty());
+  cv::Mat mono12;  // LSB-aligned 12-bit samples of the same picture
+  gray.convertTo(mono12, CV_16UC1, 16.0);
+  ASSERT_TRUE(cv::imwrite((dir_ / "full.png").string(), vgr::vision::toFullRange16(mono12, 12)));
+  ASSERT_TRUE(cv::imwrite((dir_ / "lsb.png").string(), mono12));
+  r = vgr("locate --job " + job + " --image " + (dir_ / "full.png").string() + " --json");
+  EXPECT_EQ(r.exitCode, 0) << r.out;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["parts"].size(), 1u) << r.out;
+  r = vgr("locate --job " + job + " --image " + (dir_ / "lsb.png").string() + " --json");
+  EXPECT_EQ(r.exitCode, 2) << r.out;
+  EXPECT_NE(r.out.find("LSB-aligned"), std::string::npos) << r.out;
 }
 
 TEST_F(locate_cli, LocateOverlayAndEvalOverlaysDrawTheSamePicture) {

@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <fmt/core.h>
 #include <gtest/gtest.h>
@@ -35,9 +37,13 @@ class cell_check : public ::testing::Test {
   // The example cell with `from` replaced by `to`, written as DIR/sim-cell.yaml (with the
   // example's calibration files); the check's answer.
   vgr::daemon::CheckResult check(const std::string& from = "", const std::string& to = "") {
+    if (from.empty()) return check(std::vector<std::pair<std::string, std::string>>{});
+    return check(std::vector<std::pair<std::string, std::string>>{{from, to}});
+  }
+  vgr::daemon::CheckResult check(const std::vector<std::pair<std::string, std::string>>& edits) {
     std::string yaml = vgr::config::embeddedSimCellYaml();
     yaml.replace(yaml.find("journal: /tmp/vgr/journal.jsonl"), 31, "journal: " + (dir_ / "journal.jsonl").string());
-    if (!from.empty()) {
+    for (const auto& [from, to] : edits) {
       const auto at = yaml.find(from);
       EXPECT_NE(at, std::string::npos) << from;
       if (at != std::string::npos) yaml.replace(at, from.size(), to);
@@ -133,6 +139,73 @@ TEST_F(cell_check, ADeadlineInsideTheProcessingReserveIsRefused) {
   EXPECT_EQ(r.error().exitCode, 2) << r.error().message;
   EXPECT_NE(r.error().message.find("key 'cell.cycle_deadline_ms'"), std::string::npos) << r.error().message;
   EXPECT_NE(r.error().message.find("150 ms"), std::string::npos) << r.error().message;
+}
+
+// What vgrd's start opens besides the journal (daemon/vgrd_app.cpp, daemon/plant.cpp): the
+// image archive's folder, the MQTT sink's TLS files, a replay camera's folder. Each of these
+// passed the check before and then stopped vgrd's start (exit 1) or, for the replay camera,
+// made every cycle answer -4.
+TEST_F(cell_check, AnArchiveFolderThatCannotBeCreatedExits1) {
+  std::ofstream(dir_ / "a-file") << "x";
+  const std::string archive = (dir_ / "a-file" / "archive").string();
+  const auto r = check("modbus:\n", "archive: {dir: " + archive + "}\nmodbus:\n");
+  ASSERT_FALSE(r.has_value());
+  EXPECT_EQ(r.error().exitCode, 1) << r.error().message;
+  EXPECT_NE(r.error().message.find("key 'archive.dir'"), std::string::npos) << r.error().message;
+  EXPECT_NE(r.error().message.find(archive), std::string::npos) << r.error().message;
+  EXPECT_FALSE(fs::exists(dir_ / "archive"));  // nothing created, neither here nor next to the journal
+}
+
+TEST_F(cell_check, TheDefaultArchiveFolderIsCheckedNextToTheJournal) {
+  fs::create_directories(dir_ / "logs");
+  std::ofstream(dir_ / "logs" / "archive") << "x";  // a file where vgrd would create its folder
+  const auto r = check({{"journal: " + (dir_ / "journal.jsonl").string(), "journal: " + (dir_ / "logs" / "journal.jsonl").string()},
+                        {"modbus:\n", "archive: {every_nth_good: 0}\nmodbus:\n"}});
+  ASSERT_FALSE(r.has_value());
+  EXPECT_EQ(r.error().exitCode, 1) << r.error().message;
+  EXPECT_NE(r.error().message.find((dir_ / "logs" / "archive").string()), std::string::npos) << r.error().message;
+}
+
+TEST_F(cell_check, AMissingMqttTlsFileExits1) {
+  const std::string ca = (dir_ / "no-ca.pem").string();
+  const auto r = check("modbus:\n", "mqtt: {host: 127.0.0.1, tls: {ca_file: " + ca + "}}\nmodbus:\n");
+  ASSERT_FALSE(r.has_value());
+  EXPECT_EQ(r.error().exitCode, 1) << r.error().message;
+  EXPECT_NE(r.error().message.find("key 'mqtt.tls'"), std::string::npos) << r.error().message;
+  EXPECT_NE(r.error().message.find(ca), std::string::npos) << r.error().message;
+}
+
+TEST_F(cell_check, AReplayCameraWithoutImagesExits1) {
+  fs::create_directories(dir_ / "frames");
+  const std::string folder = (dir_ / "frames").string();
+  const auto r = check("  driver: aravis\n", "  driver: replay\n  replay: {folder: " + folder + "}\n");
+  ASSERT_FALSE(r.has_value());
+  EXPECT_EQ(r.error().exitCode, 1) << r.error().message;
+  EXPECT_NE(r.error().message.find("camera.replay.folder"), std::string::npos) << r.error().message;
+  EXPECT_NE(r.error().message.find(folder), std::string::npos) << r.error().message;
+}
+
+// The camera's ROI fixes the frame size; a calibration made for another size makes every
+// cycle answer -6 NOT_CALIBRATED (daemon/cycle_runner.cpp), so the check refuses it.
+TEST_F(cell_check, ACameraRoiOfAnotherSizeThanTheCalibrationExits1) {
+  auto r = check("  pixel_format: Mono8\n", "  pixel_format: Mono8\n  roi: {width: 640, height: 512}\n");
+  ASSERT_FALSE(r.has_value());
+  EXPECT_EQ(r.error().exitCode, 1) << r.error().message;
+  EXPECT_NE(r.error().message.find("key 'camera.roi'"), std::string::npos) << r.error().message;
+  EXPECT_NE(r.error().message.find("1280x1024"), std::string::npos) << r.error().message;
+  r = check("  pixel_format: Mono8\n", "  pixel_format: Mono8\n  roi: {width: 1280, height: 1024}\n");
+  EXPECT_TRUE(r.has_value()) << r.error().message;
+}
+
+// vgrd's start binds the web port after the robots' and Modbus ports: the same port twice
+// stopped the start (exit 1) after passing the check.
+TEST_F(cell_check, AWebPortUsedByAnotherEndpointIsRefused) {
+  const auto r = check("modbus:\n", "web: {port: 50011}\nmodbus:\n");
+  ASSERT_FALSE(r.has_value());
+  EXPECT_EQ(r.error().exitCode, 2) << r.error().message;
+  EXPECT_NE(r.error().message.find("key 'web.port': port already used by another endpoint"), std::string::npos)
+      << r.error().message;
+  EXPECT_TRUE(check("modbus:\n", "web: {port: 8080}\nmodbus:\n").has_value());
 }
 
 TEST_F(cell_check, ACellCalibratedWithFilesNeedsNoModel) {

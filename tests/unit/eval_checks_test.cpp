@@ -9,6 +9,7 @@
 
 #include <fmt/core.h>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -83,6 +84,27 @@ TEST_F(eval_checks, ANearDetectionIsMatched) {
   EXPECT_EQ(rep->missed, 0);
   EXPECT_EQ(rep->falsePositives, 0);
   EXPECT_EQ(rep->countCorrectImages, 1);
+}
+
+// Errors are measured on matched parts only: with none matched there is no error to
+// report, and the JSON says null, not a perfect 0.0 px / 0.0 deg.
+TEST_F(eval_checks, NoMatchedPartReportsNoErrorFigures) {
+  scene("a.png", 960, 980);  // found 1427 px from the truth: a miss
+  truth("a.png,10,10,0\n");
+  auto rep = vgr::tools::evaluate(options_);
+  ASSERT_TRUE(rep.has_value()) << rep.error().message;
+  const auto j = nlohmann::json::parse(vgr::tools::evalJson(*rep, options_));
+  for (const char* k : {"pos_err_px_mean", "pos_err_px_max", "ang_err_deg_mean", "ang_err_deg_max"})
+    EXPECT_TRUE(j[k].is_null()) << k << " = " << j[k].dump() << " with no matched part";
+  EXPECT_EQ(j["success_rate"].get<double>(), 0.0);
+  // With a match the figures are numbers.
+  scene("a.png", 340, 260);
+  truth("a.png,399.5,299.5,0\n");
+  rep = vgr::tools::evaluate(options_);
+  ASSERT_TRUE(rep.has_value()) << rep.error().message;
+  const auto k = nlohmann::json::parse(vgr::tools::evalJson(*rep, options_));
+  EXPECT_TRUE(k["pos_err_px_mean"].is_number()) << k.dump();
+  EXPECT_LT(k["pos_err_px_max"].get<double>(), 1.0) << k.dump();
 }
 
 TEST_F(eval_checks, AnEmptyDatasetIsAnError) {

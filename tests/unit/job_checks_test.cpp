@@ -67,6 +67,30 @@ TEST(job_checks, RegionWhollyOutsideTheTemplateIsRefusedOnLoad) {
   fs::remove_all(dir);
 }
 
+// `roi` is the whole image (0 x 0) or a rectangle (both sizes > 0). A half-given ROI
+// (width without height, an offset with 0 x 0) used to load and search the whole image:
+// the part found outside the region the operator meant.
+TEST(job_checks, AHalfGivenSearchRoiIsRefusedOnLoad) {
+  const fs::path dir = tempDir("roi");
+  const struct {
+    vgr::PixelRect roi;
+    bool loads;
+  } cases[] = {{{0, 0, 0, 0}, true}, {{10, 20, 300, 200}, true}, {{0, 0, 100, 0}, false}, {{0, 0, 0, 80}, false}, {{10, 20, 0, 0}, false}};
+  for (const auto& c : cases) {
+    auto j = jobWithTemplate(dir, 100, 50);
+    j.taught.searchRoi = c.roi;
+    ASSERT_TRUE(vgr::config::writeJob(j).has_value());
+    auto job = vgr::config::loadJob(dir.string());
+    const std::string what = fmt::format("roi {},{} {}x{}", c.roi.x, c.roi.y, c.roi.width, c.roi.height);
+    EXPECT_EQ(job.has_value(), c.loads) << what << (job ? "" : ": " + job.error().message);
+    if (!c.loads && !job) {
+      EXPECT_NE(job.error().message.find((dir / "job.yaml").string() + ":"), std::string::npos) << job.error().message;
+      EXPECT_NE(job.error().message.find("key 'roi"), std::string::npos) << job.error().message;
+    }
+  }
+  fs::remove_all(dir);
+}
+
 TEST(job_checks, AGraspOnTheTemplateLoads) {
   const fs::path dir = tempDir("ok");
   ASSERT_TRUE(vgr::config::writeJob(jobWithTemplate(dir, 323, 199)).has_value());

@@ -55,8 +55,9 @@ int runCalibrateHandEye(const CalibHandEyeOptions& o) {
   for (std::size_t i = 0; i < poses->size(); ++i) {
     const auto& p = (*poses)[i];
     const std::string file = (fs::path(o.folder) / p.image).string();
-    const cv::Mat img = vision::readGray8(file).value_or(cv::Mat());
-    if (img.empty()) return bad(fmt::format("{}:{}: image '{}' cannot be read", posePath, p.line, p.image));
+    auto read = vision::readGray8(file);
+    if (!read) return bad(fmt::format("{}:{}: image '{}' cannot be read ({})", posePath, p.line, p.image, read.error().message));
+    const cv::Mat img = *read;
     if (img.size() != cam->imageSize)
       return bad(fmt::format("{}: {}x{} px, the intrinsics are for {}x{} px", file, img.cols, img.rows,
                              cam->imageSize.width, cam->imageSize.height));

@@ -45,8 +45,9 @@ int runCalibrateIntrinsics(const CalibIntrinsicsOptions& o) {
   cv::Size size;
   for (std::size_t i = 0; i < files.size(); ++i) {
     const std::string name = fs::path(files[i]).filename().string();
-    const cv::Mat img = vision::readGray8(files[i]).value_or(cv::Mat());
-    if (img.empty()) return bad(fmt::format("{}: cannot read the image", files[i]));
+    auto read = vision::readGray8(files[i]);
+    if (!read) return bad(read.error().message);
+    const cv::Mat img = *read;
     if (size.width == 0) size = img.size();
     if (img.size() != size)
       return bad(fmt::format("{}: {}x{} px, the first image is {}x{} px (one camera, one size)", files[i], img.cols,

@@ -68,8 +68,9 @@ int runCalibratePlane(const CalibPlaneOptions& o) {
     if (!he) return bad(he.error().message);
     if (he->config != calib::HandEyeConfig::EyeToHand)
       return bad(fmt::format("{}: an eye-in-hand calibration needs the snapshot pose; use --points", o.handeye));
-    const cv::Mat img = vision::readGray8(o.image).value_or(cv::Mat());
-    if (img.empty()) return bad(fmt::format("{}: cannot read the image", o.image));
+    auto read = vision::readGray8(o.image);
+    if (!read) return bad(read.error().message);
+    const cv::Mat img = *read;
     const auto d = calib::detectPattern(img, *spec, o.image);
     if (!d.found)
       return bad(fmt::format("{}: the {} {}x{} was not found{}", o.image, o.pattern.pattern, o.pattern.cols,

@@ -4,8 +4,10 @@
 #include <filesystem>
 
 #include <CLI/CLI.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include "config/job3d.hpp"
+#include "tools/vgr/calibrate_common.hpp"
 #include "tools/vgr/eval3d.hpp"
 
 namespace vgr::tools {
@@ -19,6 +21,11 @@ int runEval(const EvalCliOptions& options) {
     return runEval3d({o.jobFolder, o.datasetFolder, options.transTolMm, options.rotTolDeg, o.limit, options.json});
   } else if (!kind && std::filesystem::exists(std::filesystem::path(o.jobFolder) / "job.yaml")) {
     return badInput(kind.error().message);
+  }
+  // The plot's path before the run, not after it (a long evaluation lost at its end).
+  if (!o.plotPath.empty()) {
+    if (auto w = checkOutputPath(o.plotPath, "--plot"); !w) return badInput(w.error().message);
+    if (!cv::haveImageWriter(o.plotPath)) return badInput(o.plotPath + ": --plot needs a .png (or another image) file name");
   }
   auto rep = evaluate(o);
   if (!rep) return badInput(rep.error().message);

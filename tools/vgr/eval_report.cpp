@@ -184,12 +184,13 @@ Result<EvalReport> evaluate(const EvalOptions& o) {
   for (std::size_t i = 0; i < count; ++i) {
     const TruthImage& ti = (*truth)[i];
     const std::string path = (std::filesystem::path(o.datasetFolder) / ti.image).string();
-    const cv::Mat img = vision::readGray8(path).value_or(cv::Mat());
-    if (img.empty()) {
+    auto read = vision::readGray8(path);
+    if (!read) {
       // Reported (EvalReport::unreadable) and left out; the rest are evaluated.
-      rep.unreadable.push_back(path + ": cannot read the image");
+      rep.unreadable.push_back(read.error().message);
       continue;
     }
+    const cv::Mat img = *read;
     const auto t0 = std::chrono::steady_clock::now();
     auto out = (*locator)->locate(img);
     rep.timeMs.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
@@ -279,10 +280,14 @@ std::string evalJson(const EvalReport& r, const EvalOptions& o) {
   j["success_rate"] = r.successRate();
   j["pos_tol_px"] = o.posTolPx;
   j["ang_tol_deg"] = o.angTolDeg;
-  j["pos_err_px_mean"] = mean(r.posErrPx);
-  j["pos_err_px_max"] = maxOf(r.posErrPx);
-  j["ang_err_deg_mean"] = mean(r.angErrDeg);
-  j["ang_err_deg_max"] = maxOf(r.angErrDeg);
+  // Errors of matched parts; with none matched there is no figure (null), not a perfect 0.
+  const auto figure = [](const std::vector<double>& v, double (*f)(const std::vector<double>&)) -> nlohmann::ordered_json {
+    return v.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(f(v));
+  };
+  j["pos_err_px_mean"] = figure(r.posErrPx, mean);
+  j["pos_err_px_max"] = figure(r.posErrPx, maxOf);
+  j["ang_err_deg_mean"] = figure(r.angErrDeg, mean);
+  j["ang_err_deg_max"] = figure(r.angErrDeg, maxOf);
   j["time_ms_median"] = median(r.timeMs);
   j["time_ms_max"] = maxOf(r.timeMs);
   j["missed"] = r.missed;

@@ -21,6 +21,7 @@
 #include "core/pose.hpp"
 #include "daemon/cell_mapping.hpp"
 #include "daemon/job_locator.hpp"
+#include "tools/vgr/calibrate_common.hpp"
 #include "vision/calib/pixel_mapping.hpp"
 #include "vision/gray_image.hpp"
 #include "vision/locate/locator.hpp"
@@ -33,8 +34,9 @@ int runLocate(const LocateOptions& o) {
   auto job = config::loadJob(o.job);
   if (!job) return badInput(job.error().message);
   const std::string method = o.method.empty() ? job->method : o.method;
-  const cv::Mat img = vision::readGray8(o.image).value_or(cv::Mat());
-  if (img.empty()) return badInput(o.image + ": cannot read the image");
+  auto read = vision::readGray8(o.image);
+  if (!read) return badInput(read.error().message);
+  const cv::Mat img = *read;
   // With a calibration (a cell config), pixels map to the robot frame exactly as vgrd maps
   // them: the mapping that cell selects (daemon/cell_mapping.hpp) and vision::partPoses.
   std::unique_ptr<vision::calib::PixelMapping> mapping;
@@ -79,7 +81,10 @@ int runLocate(const LocateOptions& o) {
   const vision::calib::PixelMapping* mapWith = snapshot ? &*snapshot : mapping.get();
   auto locator = daemon::makeJobLocator(*job, method);
   if (!locator) return badInput(locator.error().message);
-  if (!o.overlay.empty() && !cv::haveImageWriter(o.overlay)) return badInput(o.overlay + ": --overlay needs a .png (or another image) file name");
+  if (!o.overlay.empty()) {
+    if (auto w = checkOutputPath(o.overlay, "--overlay"); !w) return badInput(w.error().message);
+    if (!cv::haveImageWriter(o.overlay)) return badInput(o.overlay + ": --overlay needs a .png (or another image) file name");
+  }
   const auto t0 = std::chrono::steady_clock::now();
   auto out = (*locator)->locate(img);
   const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -90,7 +95,9 @@ int runLocate(const LocateOptions& o) {
     j["time_ms"] = ms;
     j["parts"] = nlohmann::json::array();
     std::printf("%s\n", j.dump().c_str());
-    return 1;
+    // An image the job cannot search (smaller than the template, the ROI outside it: the
+    // locator's input check) is bad input; anything else the method could not do, 1.
+    return out.error().code == Status::BadArgument ? 2 : 1;
   }
   const Status status = out->parts.empty() ? Status::NoPartFound : Status::Ok;
   if (!o.overlay.empty()) {

@@ -176,8 +176,9 @@ int runReplay(const ReplayOptions& o) {
     }
     const Outcome was = fromJournal(j);
     Outcome now;
-    const cv::Mat gray = vision::readGray8(png.string()).value_or(cv::Mat());
-    if (gray.empty()) return badInput(png.string() + ": cannot read the image");
+    auto read = vision::readGray8(png.string());
+    if (!read) return badInput(read.error().message);
+    const cv::Mat gray = *read;
     const auto size = (*mapping)->imageSize();
     if (size && (gray.cols != size->width || gray.rows != size->height)) {
       now.status = statusCode(Status::NotCalibrated);

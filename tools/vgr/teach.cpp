@@ -97,8 +97,9 @@ int runTeach(const TeachOptions& o) {
   if (!o.model.empty()) return runTeach3d(o);
   if (o.image.empty()) return badInput("--image is required (or --model for a 3D job)");
   if (o.grasps.empty()) return badInput("--grasp is required with --image");
-  const cv::Mat img = vision::readGray8(o.image).value_or(cv::Mat());
-  if (img.empty()) return badInput(o.image + ": cannot read the image");
+  auto read = vision::readGray8(o.image);
+  if (!read) return badInput(read.error().message);
+  const cv::Mat img = *read;
   config::JobFile job;
   job.folder = o.out;
   job.name = o.name.empty() ? fs::path(o.out).filename().string() : o.name;
