@@ -100,7 +100,7 @@ int main(int argc, char** argv) {
   }
   vision::cloud::Eval3dAccumulator acc(addPoints, {});
   const auto& cam = scene.camera;
-  const vision::cloud::DepthIntrinsics k{cam.width, cam.height, cam.fx, cam.fy, cam.cx, cam.cy};
+  const vision::cloud::DepthIntrinsics k{cam.fx, cam.fy, cam.cx, cam.cy, cam.width, cam.height};
   for (int i = first; i < first + scenes; ++i) {
     auto s = sim::renderDepthScene(scene, static_cast<std::uint64_t>(i));
     if (!s) {

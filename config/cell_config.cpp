@@ -79,8 +79,9 @@ void parseCamera(Section s, CameraConfig& c) {
   s.read<double>("exposure_us", c.exposureUs, inRange(10.0, 1e8), "[10, 100000000]");
   s.read<double>("gain", c.gain);
   s.read<std::string>("pixel_format", c.pixelFormat,
-                      oneOf({"Mono8", "Mono10", "Mono12", "Mono16", "BayerRG8", "BayerGR8", "BayerGB8", "BayerBG8"}),
-                      "one of: Mono8, Mono10, Mono12, Mono16, BayerRG8, BayerGR8, BayerGB8, BayerBG8");
+                      oneOf({"Mono8", "Mono10", "Mono12", "Mono16", "BayerRG8", "BayerGR8", "BayerGB8", "BayerBG8",
+                             "Coord3D_C16"}),
+                      "one of: Mono8, Mono10, Mono12, Mono16, BayerRG8, BayerGR8, BayerGB8, BayerBG8, Coord3D_C16");
   Section roi(s.file(), s.get("roi"), s.join("roi"));
   roi.read<int>("x", c.roiX, inRange(0, 65535), "[0, 65535]");
   roi.read<int>("y", c.roiY, inRange(0, 65535), "[0, 65535]");
@@ -243,16 +244,26 @@ bool validIpAddress(const std::string& text) {
   return ::inet_pton(AF_INET, text.c_str(), buf) == 1 || ::inet_pton(AF_INET6, text.c_str(), buf) == 1;
 }
 
+// A token a pose frame follows: no '(' or '[' either (the frame starts with one).
+bool validFrameToken(const std::string& t) {
+  return validToken(t) && t.find_first_of("([)]") == std::string::npos;
+}
+
 void parseStrict(Section s, StrictConfig& c) {
   const std::string tokenRange = "1 to 64 printable characters without spaces, ',' or '#'";
   s.read<std::string>("command", c.command, validToken, tokenRange);
   s.read<std::string>("ready", c.ready, validToken, tokenRange);
   s.read<std::string>("done", c.done, validToken, tokenRange);
+  const std::string frameTokenRange = "1 to 64 printable characters without spaces, ',', '#', brackets or parentheses";
+  s.read<std::string>("snapshot", c.snapshot, validFrameToken, frameTokenRange);
+  s.read<std::string>("none", c.none, validFrameToken, frameTokenRange);
   std::string lineEnd = "none";
   s.read<std::string>("line_end", lineEnd, oneOf({"none", "lf", "crlf"}), "one of: none, lf, crlf");
   c.lineEnd = lineEnd == "lf" ? "\n" : lineEnd == "crlf" ? "\r\n" : "";
   s.read<int>("step_timeout_ms", c.stepTimeoutMs, inRange(50, 600000), "[50, 600000]");
   if (c.ready == c.done) s.fail(s.get("done"), "done", "must differ from ready");
+  if (!c.snapshot.empty() && (c.snapshot == c.ready || c.snapshot == c.done))
+    s.fail(s.get("snapshot"), "snapshot", "must differ from ready and done");
   s.finish();
 }
 
@@ -304,8 +315,18 @@ void parseRobot(Section s, RobotConfig& r) {
     for (auto [key, out] : {std::pair{"rz_deg", &rz}, std::pair{"ry_deg", &ry}, std::pair{"rx_deg", &rx}})
       f.read<double>(key, *out, inRange(-360.0, 360.0), "[-360, 360]");
     f.finish();
-    r.baseFromUser = poseFromZyxDeg(x, y, z, rz, ry, rx);
+    r.baseFromUser = poseFromEulerZyxDeg(x, y, z, EulerZyxDeg{rz, ry, rx});
   }
+
+  std::string abbRotation = "zyx";
+  s.read<std::string>("abb_rotation", abbRotation, oneOf({"zyx", "quaternion"}), "one of: zyx, quaternion");
+  r.abbRotation = *protocol::parseAbbRotation(abbRotation);  // oneOf() accepted exactly these names
+  if (s.get("abb_rotation") && r.dialect != Dialect::Abb) s.fail(s.get("abb_rotation"), "abb_rotation", "only for dialect abb");
+  // RAPID reads one reply of at most 80 characters: the quaternion reply takes up to 78 of them
+  // and the label two more fields (protocol/robot_codec.hpp formatReply).
+  if (r.replyLabel && r.abbRotation == AbbRotation::Quaternion)
+    s.fail(s.get("reply_label"), "reply_label",
+           "abb_rotation quaternion leaves no room for the label within RAPID's 80 characters; use abb_rotation zyx");
 
   const YAML::Node strict = s.get("strict");
   if (strict && !strict.IsNull()) {

@@ -16,6 +16,7 @@
 namespace vgr::config {
 
 // The protocol layer owns the wire choices (protocol/wire_types.hpp); the config names them.
+using protocol::AbbRotation;
 using protocol::Delivery;
 using protocol::Dialect;
 using protocol::WordOrder;
@@ -47,7 +48,8 @@ struct CameraConfig {
   double exposureUs = 5000;        // µs, [10, 1e8]; the camera's own range is checked on open
   double gain = -1;                // camera units (GenICam Gain/GainRaw); < 0 leaves the camera's value
   // GenICam name: Mono8, Mono10, Mono12, Mono16 (10/12/16 bit delivered as 16-bit samples),
-  // BayerRG8, BayerGR8, BayerGB8, BayerBG8 (converted to Mono8 gray by the driver).
+  // BayerRG8, BayerGR8, BayerGB8, BayerBG8 (converted to Mono8 gray by the driver), or
+  // Coord3D_C16 for a depth camera (z in mm through its Scan3d features; replay: a 3D data set).
   std::string pixelFormat = "Mono8";
   int roiX = 0, roiY = 0;          // px, >= 0: region offset on the sensor
   int roiWidth = 0, roiHeight = 0; // px, >= 0; 0 = the rest of the sensor from the offset
@@ -125,6 +127,11 @@ struct StrictConfig {
   std::string done = "MoveJ_pose_done";       // robot -> daemon: "move finished"
   std::string lineEnd;                        // "" (none), "\n" (lf) or "\r\n" (crlf) after each send
   int stepTimeoutMs = 10000;                  // ms, [50, 600000]: each of the two waits
+  // Eye-in-hand snapshots (docs/protocols.md): the robot sends "<snapshot>(x,y,z,rx,ry,rz)"
+  // with its flange pose and gets the four steps for the part, or "<none>(<status>)".
+  // "" (default) = vgrd pushes every part of the robot's job (paper 002's push mode).
+  std::string snapshot;                       // robot -> daemon; a token, no '(' or '['
+  std::string none = "MoveJ_none";            // daemon -> robot; a token, no '(' or '['
 };
 
 struct RobotConfig {
@@ -145,6 +152,7 @@ struct RobotConfig {
   int idleTimeoutMs = 0;       // ms, [0, 86400000]: a connection without a request is closed; 0 = never
   PartOrder partOrder = PartOrder::BestScore;
   int label = 0;               // [0, 32767]: the one label served with part_order label_only
+  AbbRotation abbRotation = AbbRotation::EulerZyx;  // dialect abb only: "zyx" or "quaternion"
   // The part's label and its confidence in every reply (protocol/robot_codec.hpp formatReply
   // withLabel): ur 10 values, abb +2 fields (<= 80 chars), fanuc 85 bytes, binary 48 bytes.
   // Default false: replies exactly as before, for robot programs that read a fixed count.

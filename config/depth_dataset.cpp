@@ -115,6 +115,26 @@ Result<DepthCameraFile> loadDepthCameraFile(const std::string& path) {
   });
 }
 
+Result<std::vector<std::string>> listDepthImages(const std::string& dir) {
+  std::error_code ec;
+  const std::filesystem::path images = std::filesystem::path(dir) / "images";
+  if (!std::filesystem::is_directory(images, ec))
+    return fail(Status::BadArgument, images.string() + ": no such folder (a 3D data set keeps its depth images there)");
+  std::vector<std::string> out;
+  for (const auto& e : std::filesystem::directory_iterator(images, ec))
+    if (e.is_regular_file() && e.path().extension() == ".png") out.push_back("images/" + e.path().filename().string());
+  if (ec) return fail(Status::BadArgument, images.string() + ": " + ec.message());
+  std::sort(out.begin(), out.end());
+  if (out.empty()) return fail(Status::BadArgument, images.string() + ": no .png depth images");
+  return out;
+}
+
+Result<void> writeDepthTruth(const std::string& path, const std::vector<DepthTruthRow>& rows) {
+  std::string text = depthTruthCsvHeader() + "\n";
+  for (const auto& r : rows) text += depthTruthCsvRow(r.image, r.hasPart ? &r.pose : nullptr) + "\n";
+  return writeTextFile(path, text);
+}
+
 std::string depthTruthCsvHeader() { return "image,x_mm,y_mm,z_mm,qw,qx,qy,qz"; }
 std::string depthTruthCsvRow(const std::string& image, const Pose* p) { return image + "," + (p ? poseFields(*p) : std::string(",,,,,,")); }
 std::string depthViewsCsvHeader() {

@@ -6,7 +6,9 @@
 //                     empty fields
 //   DIR/views/views.csv  view,x_mm,...,qz,noisy_x_mm,...,noisy_qz[,...]: the camera's pose in
 //                     the model frame, true and as the robot reported it
-// Images and PLY files are read elsewhere (vision/depth_image.hpp, vision/ply_file.hpp).
+//   DIR/images/*.png  16-bit z images (listDepthImages names them; their pixels are read
+//                     elsewhere: vision/depth_image.hpp, the replay and emulator cameras)
+// PLY files are read in vision/ply_file.hpp.
 // Parse -> validate; every error names the file and line (and the key for YAML):
 // "DIR/camera.yaml:3: key 'fx': expected a number in [...]". Start-up style I/O, any thread.
 #pragma once
@@ -14,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "core/depth.hpp"
 #include "core/pose.hpp"
 #include "core/result.hpp"
 
@@ -24,6 +27,9 @@ struct DepthCameraFile {
   double fx = 0, fy = 0;         // px, > 0
   double cx = 0, cy = 0;         // px, inside the image: [0, width - 1] x [0, height - 1]
   double depthScaleMm = 0;       // mm per 16-bit step, (0, 100]; 0 in an image = no data
+
+  DepthIntrinsics intrinsics() const { return {fx, fy, cx, cy, width, height}; }
+  void setIntrinsics(const DepthIntrinsics& k) { fx = k.fx, fy = k.fy, cx = k.cx, cy = k.cy; }
 };
 
 std::string depthCameraYaml(const DepthCameraFile& c);
@@ -53,6 +59,13 @@ struct DepthViewRow {
 // Errors as loadDepthTruth; additionally "PATH:LINE: view 'x': no such file" when the view's
 // image is not in the folder of views.csv.
 Result<std::vector<DepthViewRow>> loadDepthViews(const std::string& path);
+
+// DIR/images/*.png in name order, relative to DIR ("images/0000.png"). Errors
+// (Status::BadArgument): "DIR/images: no such folder ...", "DIR/images: no .png depth images".
+Result<std::vector<std::string>> listDepthImages(const std::string& dir);
+
+// Writes truth.csv from rows (hasPart false: the image's row of empty fields).
+Result<void> writeDepthTruth(const std::string& path, const std::vector<DepthTruthRow>& rows);
 
 // Writes rows as the fixed format (mm to 4 decimals, quaternions to 8).
 std::string depthTruthCsvHeader();

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -46,6 +47,8 @@ struct CycleResult {
   int jobId = 0;
   TriggerSource trigger = TriggerSource::Modbus;
   std::uint64_t frameId = 0;   // camera frame (GVSP block) id, 0 when no frame
+  // Eye-in-hand snapshot: T_base_flange the robot sent with its trigger (mm + quaternion).
+  std::optional<Pose> flange;
   std::vector<PartResult> parts;  // best first; only parts within the job's limits
   std::vector<RejectedPart> rejected;  // outside the limits; status -9 when `parts` is empty
   Pose reference;              // the job's taught reference (base frame) the offsets are from

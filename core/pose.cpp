@@ -23,13 +23,6 @@ Pose poseFromXyzRz(double x, double y, double z, double rzRad) {
   return fromEigen({x, y, z}, Eigen::Quaterniond(Eigen::AngleAxisd(rzRad, Eigen::Vector3d::UnitZ())));
 }
 
-Pose poseFromZyxDeg(double x, double y, double z, double rzDeg, double ryDeg, double rxDeg) {
-  const double k = M_PI / 180.0;
-  return fromEigen({x, y, z}, Eigen::Quaterniond(Eigen::AngleAxisd(rzDeg * k, Eigen::Vector3d::UnitZ()) *
-                                                 Eigen::AngleAxisd(ryDeg * k, Eigen::Vector3d::UnitY()) *
-                                                 Eigen::AngleAxisd(rxDeg * k, Eigen::Vector3d::UnitX())));
-}
-
 EulerZyxDeg toEulerZyxDeg(const Pose& p) {
   // R = Rz(a) Ry(b) Rx(c); b = asin(-r20). Near the singularity (|b| = 90 deg) rx is set
   // to 0 and rz absorbs the remaining rotation, so the three angles still rebuild R.
@@ -58,6 +51,26 @@ Vec3 toRotationVector(const Pose& p) {
   }
   const Eigen::Vector3d v = axis * angle;
   return {v.x(), v.y(), v.z()};
+}
+
+Pose poseFromEulerZyxDeg(double x, double y, double z, const EulerZyxDeg& e) {
+  constexpr double kDegToRad = M_PI / 180.0;
+  const Eigen::Quaterniond q = Eigen::AngleAxisd(e.rz * kDegToRad, Eigen::Vector3d::UnitZ()) *
+                               Eigen::AngleAxisd(e.ry * kDegToRad, Eigen::Vector3d::UnitY()) *
+                               Eigen::AngleAxisd(e.rx * kDegToRad, Eigen::Vector3d::UnitX());
+  return fromEigen({x, y, z}, q);
+}
+
+Pose poseFromRotationVector(double x, double y, double z, const Vec3& rv) {
+  const Eigen::Vector3d v(rv.x, rv.y, rv.z);
+  const double angle = v.norm();
+  const Eigen::Quaterniond q =
+      angle < 1e-15 ? Eigen::Quaterniond::Identity() : Eigen::Quaterniond(Eigen::AngleAxisd(angle, v / angle));
+  return fromEigen({x, y, z}, q);
+}
+
+Pose poseFromQuaternion(double x, double y, double z, double qw, double qx, double qy, double qz) {
+  return fromEigen({x, y, z}, Eigen::Quaterniond(qw, qx, qy, qz));
 }
 
 Pose compose(const Pose& a, const Pose& b) {

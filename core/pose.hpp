@@ -17,10 +17,6 @@ struct Vec3 {
 // Rotation about the base Z axis by rz radians, at (x, y, z) mm.
 Pose poseFromXyzRz(double x, double y, double z, double rzRad);
 
-// At (x, y, z) mm with R = Rz(rz) * Ry(ry) * Rx(rx), angles in degrees (the Z-Y-X
-// convention below: ABB's OrientZYX(rz, ry, rx), FANUC's W = rx, P = ry, R = rz).
-Pose poseFromZyxDeg(double x, double y, double z, double rzDeg, double ryDeg, double rxDeg);
-
 // Z-Y-X Euler angles in degrees: R = Rz(rz) * Ry(ry) * Rx(rx). This is ABB's
 // OrientZYX(rz, ry, rx) and FANUC's W,P,R (W = rx, P = ry, R = rz).
 struct EulerZyxDeg {
@@ -30,6 +26,15 @@ EulerZyxDeg toEulerZyxDeg(const Pose& p);
 
 // Rotation vector (axis * angle) in radians, as URScript's p[x, y, z, rx, ry, rz].
 Vec3 toRotationVector(const Pose& p);
+
+// The inverse conversions, for poses a robot sends (eye-in-hand snapshots, pose files) and
+// poses written in cell.yaml (user frames: poseFromEulerZyxDeg(x, y, z, {rz, ry, rx})):
+// (x, y, z) mm with a rotation given as Z-Y-X Euler degrees, a rotation vector (rad) or a
+// quaternion (w, x, y, z; normalised here, returned with qw >= 0). Callers check that the
+// inputs are finite and, for a quaternion, that its norm is near 1 (protocol/robot_codec).
+Pose poseFromEulerZyxDeg(double x, double y, double z, const EulerZyxDeg& e);
+Pose poseFromRotationVector(double x, double y, double z, const Vec3& rotationVectorRad);
+Pose poseFromQuaternion(double x, double y, double z, double qw, double qx, double qy, double qz);
 
 // Composition a * b and inverse, for T_base_ref^-1 * T_base_part style offsets.
 Pose compose(const Pose& a, const Pose& b);

@@ -1,6 +1,5 @@
 #include "daemon/cell_mapping.hpp"
 
-#include "vision/calib/mapping.hpp"
 #include "vision/calib/multi_height_file.hpp"
 
 namespace vgr::daemon {
@@ -20,9 +19,7 @@ Result<std::unique_ptr<vision::calib::PixelMapping>> makeCellMapping(const confi
     if (!mh) return std::unexpected(mh.error());
     return calib::multiHeightMapping(mh->map, mh->samples.imageSize);
   }
-  auto m = calib::loadCellCalibration(c.intrinsics, c.handeye, c.plane);
-  if (!m) return std::unexpected(m.error());
-  return calib::cameraPlaneMapping(*m);
+  return calib::loadCalibrationMapping(c.intrinsics, c.handeye, c.plane);
 }
 
 }  // namespace vgr::daemon

@@ -1,6 +1,8 @@
 // The pixel -> robot mapping a cell config selects (vision/calib/pixel_mapping.hpp):
 //   calibration.multiheight            -> paper 001's multi-height map (multiheight.yaml)
-//   calibration.intrinsics/handeye/plane -> the calibrated camera and work plane
+//   calibration.intrinsics/handeye/plane -> the calibrated camera and work plane (a camera on
+//                                          the flange when handeye.yaml is eye-in-hand: then
+//                                          each cycle needs the snapshot's flange pose)
 //   no calibration section             -> the config's pinhole `model` (a known camera)
 // Errors carry Status::NotCalibrated and name the file and why; vgrd then answers every
 // job with -6 NOT_CALIBRATED rather than map with something else.

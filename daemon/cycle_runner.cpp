@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <optional>
 
 #include <fmt/core.h>
 #include <opencv2/core.hpp>
@@ -139,7 +140,7 @@ void CycleRunner::setFirstCycleId(std::uint32_t id) {
   nextCycleId_ = id == 0 || id > kMaxCycleId ? 1 : id;
 }
 
-std::uint32_t CycleRunner::submit(int jobId, TriggerSource source) {
+std::uint32_t CycleRunner::submit(int jobId, TriggerSource source, const std::optional<Pose>& flange) {
   // JOB_ID 0 (a PLC that never wrote HR1, SIGUSR1, the page's trigger) runs the default job:
   // the cell's first, or the one the operator switched to (setDefaultJob).
   if (jobId == 0) jobId = defaultJob_.load();
@@ -152,7 +153,7 @@ std::uint32_t CycleRunner::submit(int jobId, TriggerSource source) {
     }
     id = nextCycleId_;
     nextCycleId_ = nextCycleId_ >= kMaxCycleId ? 1 : nextCycleId_ + 1;
-    queue_.push_back({id, jobId, source, Clock::now(), std::chrono::system_clock::now()});
+    queue_.push_back({id, jobId, source, flange, Clock::now(), std::chrono::system_clock::now()});
   }
   cv_.notify_one();
   return id;
@@ -194,6 +195,7 @@ CycleResult CycleRunner::runCycle(const Trigger& t, cv::Mat& shown) {
   r.cycleId = t.cycleId;
   r.jobId = t.jobId;
   r.trigger = t.source;
+  r.flange = t.flange;
   r.triggerTime = t.wallAt;
   const auto deadline = t.at + milliseconds(cell_.cycleDeadlineMs);
   auto end = [&](Status status, const std::string& why) {
@@ -208,6 +210,12 @@ CycleResult CycleRunner::runCycle(const Trigger& t, cv::Mat& shown) {
   const auto job = jobs_.find(t.jobId);
   if (job == jobs_.end()) return end(Status::JobNotFound, fmt::format("job {} is not configured", t.jobId));
   if (!mapping_) return end(Status::NotCalibrated, fmt::format("job {}: NOT_CALIBRATED: {}", t.jobId, calibrationError_));
+  // An eye-in-hand camera moves with the robot: without the flange pose of this image there
+  // is no mapping (a PLC or operator trigger, or a robot's TRIG without its pose).
+  if (mapping_->eyeInHand() && !t.flange)
+    return end(Status::BadArgument, fmt::format("job {}: the camera is on the flange (eye-in-hand) and this {} trigger "
+                                                "carries no flange pose; a robot sends TRIG,<job>,<pose>",
+                                                t.jobId, triggerSourceName(t.source)));
 
   // 1. grab
   const auto grabStart = Clock::now();
@@ -215,6 +223,11 @@ CycleResult CycleRunner::runCycle(const Trigger& t, cv::Mat& shown) {
   r.grabMs = msSince(grabStart);
   if (!g) return end(Status::CameraError, g.error().message);
   r.frameId = frame_.frameId;
+  // A depth frame is no image for a 2D method (the camera was set to Coord3D_C16).
+  if (frame_.depth())
+    return end(Status::BadArgument, fmt::format("job {}: a 2D method cannot locate in the depth frames of this camera "
+                                                "(pixel format Coord3D_C16)",
+                                                t.jobId));
   if (const auto size = mapping_->imageSize(); size && (frame_.width != size->width || frame_.height != size->height))
     return end(Status::NotCalibrated, fmt::format("NOT_CALIBRATED: the calibration is for {}x{} px, the camera delivers {}x{} px",
                                                   size->width, size->height, frame_.width, frame_.height));
@@ -231,8 +244,12 @@ CycleResult CycleRunner::runCycle(const Trigger& t, cv::Mat& shown) {
     image = gray8;
   }
   shown = image;
+  // Eye-in-hand: the camera was where the flange was for this image (checked above).
+  std::optional<vision::calib::SnapshotMapping> snapshot;
+  if (const auto* eyeInHand = mapping_->eyeInHand()) snapshot.emplace(*eyeInHand, *t.flange);
+  const vision::calib::PixelMapping& mapping = snapshot ? *snapshot : *mapping_;
   if (drift_) {
-    drift_->measure(image, *mapping_, r);
+    drift_->measure(image, mapping, r);
     if (r.driftAlarm && cell_.calibration.drift.refuse)
       return end(Status::NotCalibrated, "NOT_CALIBRATED: calibration drift alarm (on_alarm: refuse): " + drift_->reason());
   }
@@ -240,9 +257,9 @@ CycleResult CycleRunner::runCycle(const Trigger& t, cv::Mat& shown) {
   r.locateMs = msSince(locateStart);
   if (!found) return end(found.error().code, found.error().message);
 
-  // 3. map
+  // 3. map (eye-in-hand: through the snapshot's mapping)
   r.reference = job->second.rules.reference;
-  r.parts = vision::partPoses(found->parts, *mapping_, job->second.rules);
+  r.parts = vision::partPoses(found->parts, mapping, job->second.rules);
   if (!job->second.limits.empty()) {
     // Parts outside the job's limits are set apart (journal only), keeping the order.
     std::size_t kept = 0;

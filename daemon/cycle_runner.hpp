@@ -68,8 +68,10 @@ class CycleRunner {
   void stop();  // finishes the running cycle, answers queued triggers with INTERNAL, joins
 
   // Any thread, non-blocking. Returns the new cycle id, or 0 when the queue is full (the
-  // caller reports BUSY_OVERRUN). jobId 0 means the cell's first job.
-  std::uint32_t submit(int jobId, TriggerSource source);
+  // caller reports BUSY_OVERRUN). jobId 0 means the cell's first job. `flange`: the robot's
+  // T_base_flange at an eye-in-hand snapshot (an eye-in-hand cell maps only with one; a
+  // fixed camera ignores it).
+  std::uint32_t submit(int jobId, TriggerSource source, const std::optional<Pose>& flange = std::nullopt);
 
   std::uint64_t overruns() const { return overruns_.load(); }
   // The drift monitor (calibration.drift), null without one; its snapshot() is thread-safe.
@@ -97,6 +99,7 @@ class CycleRunner {
     std::uint32_t cycleId;
     int jobId;
     TriggerSource source;
+    std::optional<Pose> flange;
     std::chrono::steady_clock::time_point at;
     std::chrono::system_clock::time_point wallAt;
   };

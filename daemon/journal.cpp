@@ -195,6 +195,11 @@ std::string Journal::toJson(const CycleResult& r, const std::vector<JournalRobot
   nlohmann::json parts = nlohmann::json::array();
   for (const auto& p : r.parts) parts.push_back(partJson(p));
   j["parts"] = std::move(parts);
+  if (r.flange) {  // eye-in-hand: where the robot said its flange was for this image
+    const auto e = toEulerZyxDeg(*r.flange);
+    j["flange"] = {{"x_mm", round3(r.flange->x)}, {"y_mm", round3(r.flange->y)}, {"z_mm", round3(r.flange->z)},
+                   {"rz_deg", round3(e.rz)}, {"ry_deg", round3(e.ry)}, {"rx_deg", round3(e.rx)}};
+  }
   if (!r.rejected.empty()) {
     nlohmann::json rejected = nlohmann::json::array();
     for (const auto& x : r.rejected) {

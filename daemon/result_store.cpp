@@ -215,7 +215,7 @@ void ResultStore::handle(const std::string& robot, const protocol::RobotRequest&
       reply(r);
       return;
     }
-    const std::uint32_t cycle = trigger_(job);
+    const std::uint32_t cycle = trigger_(job, req.flange);
     if (cycle == 0) {
       r.status = Status::BusyOverrun;
       reply(r);

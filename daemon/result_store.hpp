@@ -27,7 +27,9 @@
 //  - TRIG[,<job>]: the robot asks for a part with no PLC in the loop: a cycle of the job is
 //    triggered (TriggerSource::Robot) and the request waits for THAT cycle's result, served
 //    like GET (its next part in the robot's order), up to the reply deadline, then
-//    2 RESULT_NOT_READY; -3 BUSY_OVERRUN at once when the cycle queue is full.
+//    2 RESULT_NOT_READY; -3 BUSY_OVERRUN at once when the cycle queue is full. An
+//    eye-in-hand snapshot (TRIG,<job>,<pose>, or GET with a pose) is a TRIG whose cycle
+//    maps with the flange pose it carries.
 // Unknown job anywhere: -7 JOB_NOT_FOUND.
 // Lives on the I/O thread: every method must be called there (post from elsewhere).
 #pragma once
@@ -78,8 +80,9 @@ class ResultStore {
   // Registers a robot (by endpoint name). A robot never registered gets the default policy.
   void addRobot(const std::string& robot, RobotPolicy policy, RobotDelivery delivery = {});
   // What TRIG calls (on the I/O thread; must not block): the new cycle id, 0 when refused.
+  // `flange`: an eye-in-hand snapshot's T_base_flange (TRIG,<job>,<pose>), else empty.
   // Without one, TRIG is answered -1 UNKNOWN_COMMAND.
-  using TriggerFn = std::function<std::uint32_t(int jobId)>;
+  using TriggerFn = std::function<std::uint32_t(int jobId, const std::optional<Pose>& flange)>;
   void setTrigger(TriggerFn trigger) { trigger_ = std::move(trigger); }
 
   void onCycleStarted(std::uint32_t cycleId, int jobId);

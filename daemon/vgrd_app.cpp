@@ -225,8 +225,8 @@ Result<void> VgrdApp::start() {
     s.plant->metrics().watchCalibrationFiles(std::move(files));
     if (c.drift.enabled) s.plant->metrics().enableDrift();
   }
-  s.results->setTrigger([&s](int jobId) {
-    return s.plant->triggered(TriggerSource::Robot, s.cycles->submit(jobId, TriggerSource::Robot));
+  s.results->setTrigger([&s](int jobId, const std::optional<Pose>& flange) {
+    return s.plant->triggered(TriggerSource::Robot, s.cycles->submit(jobId, TriggerSource::Robot, flange));
   });
 
   CycleSinks sinks;
@@ -253,10 +253,13 @@ Result<void> VgrdApp::start() {
     ep.allowedClients = rc.allowedClients;
     ep.controlClients = rc.controlClients;
     ep.idleTimeoutMs = rc.idleTimeoutMs;
+    ep.abbRotation = rc.abbRotation;
     ep.strict.command = rc.strict.command;
     ep.strict.ready = rc.strict.ready;
     ep.strict.done = rc.strict.done;
     ep.strict.lineEnd = rc.strict.lineEnd;
+    ep.strict.snapshot = rc.strict.snapshot;
+    ep.strict.none = rc.strict.none;
     ep.stepTimeoutMs = rc.strict.stepTimeoutMs;
 
     RobotPolicy policy;

@@ -18,6 +18,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/log.hpp"
+#include "drivers/depth_frame.hpp"
 
 namespace vgr::drivers {
 namespace {
@@ -60,6 +61,8 @@ const FormatInfo kFormats[] = {
     {"BayerGR8", ARV_PIXEL_FORMAT_BAYER_GR_8, PixelType::Mono8, 8, cv::COLOR_BayerGB2GRAY},
     {"BayerGB8", ARV_PIXEL_FORMAT_BAYER_GB_8, PixelType::Mono8, 8, cv::COLOR_BayerGR2GRAY},
     {"BayerBG8", ARV_PIXEL_FORMAT_BAYER_BG_8, PixelType::Mono8, 8, cv::COLOR_BayerRG2GRAY},
+    // Depth cameras: range in Scan3d units, delivered as float32 z in mm (depth_frame.hpp).
+    {"Coord3D_C16", ARV_PIXEL_FORMAT_COORD3D_C_16, PixelType::DepthMm, 16, -1},
 };
 
 const FormatInfo* findFormat(const std::string& name) {
@@ -326,9 +329,20 @@ class AravisCamera final : public Camera {
     const bool offered = listContains(formats, n, format_->name);
     const std::string offer = joinList(formats, n);
     g_free(formats);
-    if (!offered) return failSetting("pixel_format", "'" + cfg_.pixelFormat + "' is not supported by the camera; it offers " + offer);
+    if (!offered) {
+      if (format_->out == PixelType::DepthMm)
+        return failSetting("pixel_format", "the camera's PixelFormat has no 'Coord3D_C16' entry: not a depth camera the driver "
+                                           "can use (it offers " + offer + ")");
+      return failSetting("pixel_format", "'" + cfg_.pixelFormat + "' is not supported by the camera; it offers " + offer);
+    }
     arv_camera_set_pixel_format(camera_, format_->arv, &err);
     if (auto r = check("pixel_format", "PixelFormat=" + cfg_.pixelFormat); !r) return r;
+    if (format_->out == PixelType::DepthMm) {
+      if (cfg_.roiX != 0 || cfg_.roiY != 0)
+        return failSetting("roi", "a depth camera's Scan3dPrincipalPointU/V are taken as the camera gives them; an ROI "
+                                  "offset would move the principal point, so it is not supported");
+      if (auto r = applyDepthFeatures(); !r) return r;
+    }
 
     // Region of interest: offsets to 0 first so that any width fits, then size, then offsets.
     gint sensorW = 0, sensorH = 0;
@@ -447,6 +461,75 @@ class AravisCamera final : public Camera {
     return {};
   }
 
+  // Depth cameras (SFNC Scan3dControl): read the features that say how a raw Coord3D_C16
+  // value becomes mm and what the intrinsics are, refuse what cannot be used (naming the
+  // feature), log them, and turn on multipart (range + confidence) when the camera offers it.
+  Result<void> applyDepthFeatures() {
+    GError* err = nullptr;
+    auto has = [&](const char* f) { return static_cast<bool>(arv_camera_is_feature_available(camera_, f, nullptr)); };
+    if (has("Scan3dCoordinateSelector")) {
+      arv_camera_set_string(camera_, "Scan3dCoordinateSelector", "CoordinateC", &err);
+      if (err) return failSetting("pixel_format", "cannot set Scan3dCoordinateSelector=CoordinateC: " + takeMessage(err));
+    }
+    Scan3dFeatures f;
+    std::string readError;
+    auto text = [&](const char* name) -> std::string {
+      if (!has(name)) return {};
+      const char* v = arv_camera_get_string(camera_, name, &err);
+      if (err) readError = std::string(name) + ": " + takeMessage(err);
+      return v ? v : "";
+    };
+    auto number = [&](const char* name) -> std::optional<double> {
+      if (!has(name)) return std::nullopt;
+      const double v = arv_camera_get_float(camera_, name, &err);
+      if (err) {
+        readError = std::string(name) + ": " + takeMessage(err);
+        return std::nullopt;
+      }
+      return v;
+    };
+    f.distanceUnit = text("Scan3dDistanceUnit");
+    f.coordinateSystem = text("Scan3dCoordinateSystem");
+    f.outputMode = text("Scan3dOutputMode");
+    f.scale = number("Scan3dCoordinateScale");
+    f.offset = number("Scan3dCoordinateOffset");
+    if (has("Scan3dInvalidDataFlag")) {
+      f.invalidFlag = arv_camera_get_boolean(camera_, "Scan3dInvalidDataFlag", &err) != FALSE;
+      if (err) readError = "Scan3dInvalidDataFlag: " + takeMessage(err);
+    }
+    f.invalidValue = number("Scan3dInvalidDataValue");
+    f.focalLength = number("Scan3dFocalLength");
+    f.principalPointU = number("Scan3dPrincipalPointU");
+    f.principalPointV = number("Scan3dPrincipalPointV");
+    if (!readError.empty()) return failSetting("pixel_format", "cannot read " + readError);
+    auto encoding = depthEncoding(f);
+    if (!encoding) return failSetting("pixel_format", "Coord3D_C16: " + encoding.error().message);
+    depth_ = *encoding;
+    multipart_ = false;
+    std::string parts = "single part";
+    if (arv_camera_is_gv_device(camera_)) {
+      const bool offered = arv_camera_gv_is_multipart_supported(camera_, &err) != FALSE;
+      if (err) g_clear_error(&err);  // a camera without the multipart capability register
+      if (offered) {
+        // Range on, confidence on when offered (pixels it marks 0 have no data), the rest off.
+        if (has("ComponentSelector") && has("ComponentEnable")) {
+          for (const char* component : {"Range", "Confidence", "Intensity"}) {
+            if (!arv_camera_is_enumeration_entry_available(camera_, "ComponentSelector", component, nullptr)) continue;
+            arv_camera_set_string(camera_, "ComponentSelector", component, &err);
+            if (!err) arv_camera_set_boolean(camera_, "ComponentEnable", std::string(component) != "Intensity", &err);
+            if (err) return failSetting("pixel_format", std::string("cannot enable the ") + component + " component: " + takeMessage(err));
+          }
+        }
+        arv_camera_gv_set_multipart(camera_, TRUE, &err);
+        if (err) return failSetting("pixel_format", "cannot turn on GigE multipart: " + takeMessage(err));
+        multipart_ = true;
+        parts = "multipart (range + confidence)";
+      }
+    }
+    log::info("camera", "{}: depth {}, {}", describe(), drivers::describe(f, depth_), parts);
+    return {};
+  }
+
   CameraStats streamStats() const {
     CameraStats s;
     if (!stream_) return s;
@@ -542,7 +625,54 @@ class AravisCamera final : public Camera {
     return {};
   }
 
+  Result<void> convertDepthBuffer(ArvBuffer* buf, Frame& out) {
+    std::vector<BufferPart>& parts = parts_;  // reused: no allocation once warm
+    parts.clear();
+    if (arv_buffer_get_payload_type(buf) == ARV_BUFFER_PAYLOAD_TYPE_MULTIPART) {
+      for (guint i = 0; i < arv_buffer_get_n_parts(buf); ++i) {
+        BufferPart p;
+        size_t size = 0;
+        p.data = static_cast<const std::uint8_t*>(arv_buffer_get_part_data(buf, i, &size));
+        p.size = size;
+        p.width = arv_buffer_get_part_width(buf, i);
+        p.height = arv_buffer_get_part_height(buf, i);
+        p.pixelFormat = static_cast<std::uint32_t>(arv_buffer_get_part_pixel_format(buf, i));
+        p.dataType = static_cast<int>(arv_buffer_get_part_data_type(buf, i));
+        parts.push_back(p);
+      }
+    } else {
+      BufferPart p;
+      size_t size = 0;
+      p.data = static_cast<const std::uint8_t*>(arv_buffer_get_data(buf, &size));
+      p.size = size;
+      p.width = arv_buffer_get_image_width(buf);
+      p.height = arv_buffer_get_image_height(buf);
+      p.pixelFormat = static_cast<std::uint32_t>(arv_buffer_get_image_pixel_format(buf));
+      p.dataType = 5;  // 3D image
+      parts.push_back(p);
+    }
+    auto which = selectDepthParts(parts);
+    if (!which) return setStatus(FrameStatus::Failed, "unexpected frame: " + which.error().message);
+    const BufferPart& range = parts[which->range];
+    const BufferPart* confidence = which->confidence ? &parts[*which->confidence] : nullptr;
+    if (auto r = convertDepth(range, confidence, depth_, out.data); !r)
+      return setStatus(FrameStatus::Failed, "unexpected frame: " + r.error().message);
+    out.width = range.width;
+    out.height = range.height;
+    out.pixel = PixelType::DepthMm;
+    out.bitDepth = 32;
+    out.intrinsics = depth_.intrinsics;
+    out.intrinsics.width = out.width;
+    out.intrinsics.height = out.height;
+    out.frameId = arv_buffer_get_frame_id(buf);
+    out.deviceTimestampNs = arv_buffer_get_timestamp(buf);
+    out.hostTimestampNs = arv_buffer_get_system_timestamp(buf);
+    if (out.hostTimestampNs == 0) out.hostTimestampNs = wallNs();
+    return {};
+  }
+
   Result<void> convert(ArvBuffer* buf, Frame& out) {
+    if (format_->out == PixelType::DepthMm) return convertDepthBuffer(buf, out);
     size_t size = 0;
     const auto* data = static_cast<const std::uint8_t*>(arv_buffer_get_data(buf, &size));
     const int w = arv_buffer_get_image_width(buf), h = arv_buffer_get_image_height(buf);
@@ -583,6 +713,9 @@ class AravisCamera final : public Camera {
   CameraStats stats_;        // frame counters (this object)
   CameraStats streamBase_;   // packet counters of streams already destroyed
   gint width_ = 0, height_ = 0;
+  DepthEncoding depth_;      // Coord3D_C16: read from the Scan3d features on every open
+  bool multipart_ = false;   // the camera sends range (+ confidence) as GigE multipart
+  std::vector<BufferPart> parts_;  // convertDepthBuffer's scratch (acquisition thread)
 };
 
 }  // namespace

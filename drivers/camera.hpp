@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "core/depth.hpp"
 #include "core/result.hpp"
 
 namespace vgr::config {
@@ -32,15 +33,19 @@ enum class FrameStatus {
   EndOfStream,   // replay camera: the folder is exhausted and looping is off
   Failed,        // anything else (unexpected pixel format or size, conversion failure)
 };
+// (A depth camera whose Scan3d unit or format the driver cannot use is refused by open(),
+// with Status::CameraError and a line naming the feature: it never delivers a frame.)
 const char* frameStatusName(FrameStatus s);  // "ok", "timeout", "incomplete", ...
 
-// Pixel layout of Frame::data. Bayer sensors are converted to Mono8 by the driver.
-enum class PixelType { Mono8, Mono16 };
+// Pixel layout of Frame::data. Bayer sensors are converted to Mono8 by the driver; depth
+// cameras (Coord3D_C16) deliver DepthMm: float32 z in mm, 0 = no data (core/depth.hpp).
+enum class PixelType { Mono8, Mono16, DepthMm };
 
 struct Frame {
   // Row-major, stride == width * bytesPerPixel(); Mono16 samples are host-endian uint16
-  // holding `bitDepth` significant bits (10, 12 or 16). Reused between frames: the vector
-  // never reallocates once warm.
+  // holding `bitDepth` significant bits (10, 12 or 16); DepthMm samples are host float32 z in
+  // mm (0 = no data): cv::Mat(height, width, CV_32FC1, data.data()). Reused between frames:
+  // the vector never reallocates once warm.
   std::vector<std::uint8_t> data;
   int width = 0, height = 0;       // px
   PixelType pixel = PixelType::Mono8;
@@ -48,7 +53,9 @@ struct Frame {
   std::uint64_t frameId = 0;       // device frame (GVSP block) id; replay: 1-based image count
   std::uint64_t deviceTimestampNs = 0;  // camera clock, ns (0 when the device has none)
   std::uint64_t hostTimestampNs = 0;    // host wall clock (ns since the Unix epoch) at arrival
-  int bytesPerPixel() const { return pixel == PixelType::Mono16 ? 2 : 1; }
+  DepthIntrinsics intrinsics;           // DepthMm only: the pinhole intrinsics of this image
+  int bytesPerPixel() const { return pixel == PixelType::DepthMm ? 4 : pixel == PixelType::Mono16 ? 2 : 1; }
+  bool depth() const { return pixel == PixelType::DepthMm; }
 };
 
 // Cumulative since construction (survives close/open), frames and GVSP packets.

@@ -89,17 +89,13 @@ Result<void> CameraWorker::grab(Frame& out, Clock::time_point deadline, FrameSta
   return {};
 }
 
-bool CameraWorker::connect() {
-  if (auto r = camera_->open(); !r) {
-    log::debug("camera", "{}", r.error().message);
-    return false;
-  }
+Result<void> CameraWorker::connect() {
+  if (auto r = camera_->open(); !r) return r;
   if (auto r = camera_->start(); !r) {
-    log::debug("camera", "{}", r.error().message);
     camera_->close();
-    return false;
+    return r;
   }
-  return true;
+  return {};
 }
 
 void CameraWorker::disconnect() {
@@ -176,6 +172,7 @@ void CameraWorker::run() {
   int backoffMs = cfg_.reconnectMinMs;
   bool everConnected = false;
   bool reportedDown = false;
+  std::string reportedWhy;  // the reason last logged at warn level
   for (;;) {
     heartbeat_.beat();  // every turn: waits are at most 200 ms or the back-off (daemon/watchdog.hpp)
     {
@@ -184,7 +181,8 @@ void CameraWorker::run() {
     }
     if (camera_->state() != CameraState::Streaming) {
       const auto t0 = Clock::now();
-      if (connect()) {
+      const Result<void> up = connect();
+      if (up) {
         {
           std::lock_guard lock(mutex_);
           streaming_ = true;
@@ -195,10 +193,18 @@ void CameraWorker::run() {
                   std::chrono::duration_cast<milliseconds>(Clock::now() - t0).count());
         everConnected = true;
         reportedDown = false;
+        reportedWhy.clear();
         backoffMs = cfg_.reconnectMinMs;
       } else {
-        if (!reportedDown) log::warn("camera", "{}: cannot connect; retrying with back-off up to {} ms", describe_, cfg_.reconnectMaxMs);
+        // Why, at warn level once per outage and again when the reason changes (a camera
+        // refused for a feature it reports must say which: issue 14); repeats at debug.
+        const std::string& why = up.error().message;
+        if (!reportedDown || why != reportedWhy)
+          log::warn("camera", "{}: cannot connect ({}); retrying with back-off up to {} ms", describe_, why, cfg_.reconnectMaxMs);
+        else
+          log::debug("camera", "{}", why);
         reportedDown = true;
+        reportedWhy = why;
         // The back-off in slices, a beat at each (reconnect_max_ms may exceed the stall limit).
         const auto until = Clock::now() + milliseconds(backoffMs);
         std::unique_lock lock(mutex_);

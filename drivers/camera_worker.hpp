@@ -62,7 +62,8 @@ class CameraWorker {
 
  private:
   void run();
-  bool connect();      // acquisition thread
+  // Opens and starts the camera; the error says why not (a refused camera names the feature).
+  Result<void> connect();  // acquisition thread
   void disconnect();   // acquisition thread
   void serve(std::uint64_t seq);  // acquisition thread: one request with its retries
 

@@ -12,6 +12,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "config/depth_dataset.hpp"
+
 namespace vgr::drivers {
 namespace {
 
@@ -44,12 +46,14 @@ class ReplayCamera final : public Camera {
     if (state_ != CameraState::Closed) return fail(Status::Internal, describe() + ": open() while not closed");
     if (cfg_.trigger == config::TriggerMode::FreeRun)
       return fail(Status::CameraError, describe() + ": camera.trigger.mode: free_run is not supported by the replay camera");
-    if (cfg_.pixelFormat.rfind("Mono", 0) != 0)
-      return fail(Status::CameraError, describe() + ": camera.pixel_format: '" + cfg_.pixelFormat + "' is not supported by the replay camera (Mono8..Mono16)");
+    depth_ = cfg_.pixelFormat == "Coord3D_C16";
+    if (cfg_.pixelFormat.rfind("Mono", 0) != 0 && !depth_)
+      return fail(Status::CameraError, describe() + ": camera.pixel_format: '" + cfg_.pixelFormat + "' is not supported by the replay camera (Mono8..Mono16, Coord3D_C16)");
     std::error_code ec;
     if (!fs::is_directory(cfg_.replayFolder, ec))
       return fail(Status::CameraError, describe() + ": camera.replay.folder: '" + cfg_.replayFolder + "' is not a folder");
     files_.clear();
+    if (depth_) return openDepthSet();
     for (const auto& e : fs::directory_iterator(cfg_.replayFolder, ec))
       if (e.is_regular_file() && isImage(e.path())) files_.push_back(e.path());
     if (ec) return fail(Status::CameraError, describe() + ": cannot list the folder: " + ec.message());
@@ -84,8 +88,9 @@ class ReplayCamera final : public Camera {
     const fs::path& path = files_[next_ % files_.size()];
     std::error_code ec;
     if (!fs::exists(path, ec)) return failWith(FrameStatus::Disconnected, "image " + path.string() + " vanished");
-    cv::Mat img = cv::imread(path.string(), cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
+    cv::Mat img = cv::imread(path.string(), depth_ ? cv::IMREAD_UNCHANGED : cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
     if (img.empty()) return failWith(FrameStatus::Failed, "cannot decode " + path.string());
+    if (depth_) return serveDepth(img, path, out);
     if (img.channels() == 3) cv::cvtColor(img, img, cv::COLOR_BGR2GRAY);
     if (img.channels() == 4) cv::cvtColor(img, img, cv::COLOR_BGRA2GRAY);
     const bool wide = cfg_.pixelFormat != "Mono8";
@@ -111,6 +116,45 @@ class ReplayCamera final : public Camera {
   }
 
  private:
+  // A 3D data-set folder (config/depth_dataset.hpp): camera.yaml and images/*.png.
+  Result<void> openDepthSet() {
+    auto cam = config::loadDepthCameraFile((fs::path(cfg_.replayFolder) / "camera.yaml").string());
+    if (!cam) return fail(Status::CameraError, describe() + ": camera.replay.folder (a 3D data set for Coord3D_C16): " + cam.error().message);
+    auto images = config::listDepthImages(cfg_.replayFolder);
+    if (!images) return fail(Status::CameraError, describe() + ": camera.replay.folder: " + images.error().message);
+    camera_ = *cam;
+    for (const auto& i : *images) files_.push_back(fs::path(cfg_.replayFolder) / i);
+    state_ = CameraState::Open;
+    return {};
+  }
+
+  // z = value * depth_scale_mm, 0 = no data, with camera.yaml's intrinsics.
+  Result<void> serveDepth(const cv::Mat& img, const fs::path& path, Frame& out) {
+    if (img.type() != CV_16UC1)
+      return failWith(FrameStatus::Failed, path.string() + ": not a 16-bit single-channel depth image (" +
+                                               std::to_string(img.channels()) + " channel(s), " +
+                                               (img.depth() == CV_8U ? "8" : img.depth() == CV_16U ? "16" : "other") + "-bit)");
+    if (img.cols != camera_.width || img.rows != camera_.height)
+      return failWith(FrameStatus::Failed, path.string() + ": " + std::to_string(img.cols) + "x" + std::to_string(img.rows) +
+                                               " px, camera.yaml says " + std::to_string(camera_.width) + "x" +
+                                               std::to_string(camera_.height));
+    out.width = img.cols;
+    out.height = img.rows;
+    out.pixel = PixelType::DepthMm;
+    out.bitDepth = 32;
+    out.intrinsics = camera_.intrinsics();
+    out.data.resize(static_cast<std::size_t>(img.cols) * img.rows * sizeof(float));
+    cv::Mat z(img.rows, img.cols, CV_32FC1, out.data.data());
+    img.convertTo(z, CV_32F, camera_.depthScaleMm);  // 0 stays 0: no data
+    ++next_;
+    out.frameId = next_;
+    out.deviceTimestampNs = 0;
+    out.hostTimestampNs = wallNs();
+    lastStatus_ = FrameStatus::Ok;
+    stats_.completed++;
+    return {};
+  }
+
   Result<void> failWith(FrameStatus s, const std::string& what) {
     lastStatus_ = s;
     if (s != FrameStatus::IllegalState) {
@@ -124,6 +168,8 @@ class ReplayCamera final : public Camera {
   config::CameraConfig cfg_;
   std::vector<fs::path> files_;
   std::size_t next_ = 0;  // images served since construction (the position survives reopen)
+  bool depth_ = false;     // Coord3D_C16: the folder is a 3D data set
+  config::DepthCameraFile camera_;  // its camera.yaml
   CameraState state_ = CameraState::Closed;
   FrameStatus lastStatus_ = FrameStatus::Ok;
   CameraStats stats_;

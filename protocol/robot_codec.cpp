@@ -5,6 +5,7 @@
 #include <charconv>
 #include <cmath>
 #include <system_error>
+#include <vector>
 
 namespace vgr::protocol {
 namespace binary {
@@ -91,6 +92,31 @@ std::string formatAbb(int status, std::uint32_t cycle, const Pose& p, bool zeroP
   for (double v : values) {
     out.push_back(',');
     appendFixed(out, v, 3);
+  }
+  return out;
+}
+
+// The RAPID orient of a pose: q1..q4 = w, x, y, z, unit, q1 >= 0 (core/pose keeps w >= 0).
+std::string formatAbbQuaternion(int status, std::uint32_t cycle, const Pose& p, bool zeroPose) {
+  double q[4] = {1.0, 0.0, 0.0, 0.0};
+  if (!zeroPose) {
+    const double n = std::sqrt(p.qw * p.qw + p.qx * p.qx + p.qy * p.qy + p.qz * p.qz);
+    const double sign = p.qw < 0 ? -1.0 : 1.0;
+    q[0] = sign * p.qw / n, q[1] = sign * p.qx / n, q[2] = sign * p.qy / n, q[3] = sign * p.qz / n;
+  }
+  const double pos[3] = {zeroPose ? 0.0 : p.x, zeroPose ? 0.0 : p.y, zeroPose ? 0.0 : p.z};
+  std::string out;
+  out.reserve(kAbbMaxReplyChars);
+  appendInt(out, status);
+  out.push_back(',');
+  appendInt(out, cycle);
+  for (double v : pos) {
+    out.push_back(',');
+    appendFixed(out, v, 3);
+  }
+  for (double v : q) {
+    out.push_back(',');
+    appendFixed(out, v, 5);
   }
   return out;
 }
@@ -195,6 +221,15 @@ std::string_view dialectName(Dialect dialect) {
   return "?";
 }
 
+std::optional<AbbRotation> parseAbbRotation(std::string_view text) {
+  if (text == "zyx") return AbbRotation::EulerZyx;
+  if (text == "quaternion") return AbbRotation::Quaternion;
+  return std::nullopt;
+}
+
+std::string_view abbRotationName(AbbRotation rotation) {
+  return rotation == AbbRotation::Quaternion ? "quaternion" : "zyx";
+}
 std::optional<Delivery> parseDelivery(std::string_view text) {
   if (text == "pose") return Delivery::Pose;
   if (text == "offset") return Delivery::Offset;
@@ -264,53 +299,171 @@ Result<int> parseJob(std::string_view jobText) {
   return job;
 }
 
+// Comma-separated finite numbers (blanks around each allowed, a leading '+' too).
+Result<std::vector<double>> parseNumbers(std::string_view text) {
+  std::vector<double> out;
+  for (;;) {
+    const std::size_t comma = text.find(',');
+    std::string_view field = trim(text.substr(0, comma));
+    if (!field.empty() && field.front() == '+') field.remove_prefix(1);
+    double v = 0;
+    const auto [ptr, ec] = std::from_chars(field.data(), field.data() + field.size(), v);
+    if (field.empty() || ec != std::errc{} || ptr != field.data() + field.size())
+      return fail(Status::BadArgument, "pose field " + std::to_string(out.size() + 1) + " is not a number");
+    if (!std::isfinite(v)) return fail(Status::BadArgument, "pose field " + std::to_string(out.size() + 1) + " is not finite");
+    out.push_back(v);
+    if (out.size() > 16) return fail(Status::BadArgument, "pose has too many fields");
+    if (comma == std::string_view::npos) break;
+    text.remove_prefix(comma + 1);
+  }
+  return out;
+}
+
+// `text` without `open` at its start and `close` at its end (after trimming), when it has both.
+bool unwrap(std::string_view& text, std::string_view open, std::string_view close) {
+  const std::string_view t = trim(text);
+  if (t.size() < open.size() + close.size() || t.substr(0, open.size()) != open || t.substr(t.size() - close.size()) != close)
+    return false;
+  text = t.substr(open.size(), t.size() - open.size() - close.size());
+  return true;
+}
+
+Result<void> checkPosition(double x, double y, double z) {
+  if (std::abs(x) > kMaxAbsPositionMm || std::abs(y) > kMaxAbsPositionMm || std::abs(z) > kMaxAbsPositionMm)
+    return fail(Status::BadArgument, "pose position beyond +-99999.999 mm");
+  return {};
+}
+
+Result<Pose> poseFromQuaternionChecked(double x, double y, double z, double qw, double qx, double qy, double qz) {
+  const double n = std::sqrt(qw * qw + qx * qx + qy * qy + qz * qz);
+  if (!(std::abs(n - 1.0) <= kMaxQuaternionNormError))
+    return fail(Status::BadArgument, "pose quaternion has norm " + std::to_string(n) + ", not 1: not a rotation");
+  if (auto ok = checkPosition(x, y, z); !ok) return std::unexpected(ok.error());
+  return poseFromQuaternion(x, y, z, qw, qx, qy, qz);
+}
+
+Result<Pose> poseFromEulerChecked(double x, double y, double z, double a, double b, double c, bool zyxOrder) {
+  for (double v : {a, b, c})
+    if (std::abs(v) > 360.0) return fail(Status::BadArgument, "pose angle beyond +-360 degrees: not a rotation a controller sends");
+  if (auto ok = checkPosition(x, y, z); !ok) return std::unexpected(ok.error());
+  // abb: rz, ry, rx (OrientZYX order); fanuc: W, P, R = rx, ry, rz.
+  return poseFromEulerZyxDeg(x, y, z, zyxOrder ? EulerZyxDeg{a, b, c} : EulerZyxDeg{c, b, a});
+}
+
+Result<Pose> poseFromMetresRotationVector(const std::vector<double>& v) {
+  const double angle = std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5]);
+  if (angle > 2 * M_PI + 1e-9)
+    return fail(Status::BadArgument, "pose rotation vector longer than 2 pi: not a rotation a controller sends");
+  const double x = v[0] * 1000.0, y = v[1] * 1000.0, z = v[2] * 1000.0;
+  if (auto ok = checkPosition(x, y, z); !ok) return std::unexpected(ok.error());
+  return poseFromRotationVector(x, y, z, Vec3{v[3], v[4], v[5]});
+}
+
 }  // namespace
 
-Result<RobotRequest> parseRequest(std::string_view line) {
-  // Split on commas (at most 4 fields looked at; more is an error anyway).
-  std::array<std::string_view, 4> fields{};
-  std::size_t count = 0;
-  std::string_view rest = line;
-  for (;;) {
-    const std::size_t comma = rest.find(',');
-    const std::string_view field = trim(rest.substr(0, comma));
-    if (count < fields.size()) fields[count] = field;
-    ++count;
-    if (comma == std::string_view::npos) break;
-    rest.remove_prefix(comma + 1);
+Result<Pose> parsePose(Dialect dialect, std::string_view text) {
+  switch (dialect) {
+    case Dialect::Ur:
+    case Dialect::Strict: {
+      std::string_view body = text;
+      unwrap(body, "p[", "]");  // URScript's printed pose
+      auto v = parseNumbers(body);
+      if (!v) return std::unexpected(v.error());
+      if (v->size() != 6) return fail(Status::BadArgument, "pose needs 6 numbers (x, y, z in m, rx, ry, rz in rad), got " + std::to_string(v->size()));
+      return poseFromMetresRotationVector(*v);
+    }
+    case Dialect::Abb: {
+      std::string_view body = text;
+      if (unwrap(body, "[[", "]]")) {  // RAPID ValToStr of a pose: [[x,y,z],[q1,q2,q3,q4]]
+        const std::size_t mid = body.find("],[");
+        if (mid == std::string_view::npos) return fail(Status::BadArgument, "pose: expected [[x,y,z],[q1,q2,q3,q4]]");
+        auto pos = parseNumbers(body.substr(0, mid));
+        auto rot = parseNumbers(body.substr(mid + 3));
+        if (!pos) return std::unexpected(pos.error());
+        if (!rot) return std::unexpected(rot.error());
+        if (pos->size() != 3 || rot->size() != 4) return fail(Status::BadArgument, "pose: expected [[x,y,z],[q1,q2,q3,q4]]");
+        const auto& p = *pos;
+        const auto& q = *rot;
+        return poseFromQuaternionChecked(p[0], p[1], p[2], q[0], q[1], q[2], q[3]);
+      }
+      auto v = parseNumbers(body);
+      if (!v) return std::unexpected(v.error());
+      const auto& n = *v;
+      if (n.size() == 7) return poseFromQuaternionChecked(n[0], n[1], n[2], n[3], n[4], n[5], n[6]);
+      if (n.size() == 6) return poseFromEulerChecked(n[0], n[1], n[2], n[3], n[4], n[5], true);
+      return fail(Status::BadArgument, "pose needs 7 numbers (x, y, z mm, q1..q4) or 6 (x, y, z mm, rz, ry, rx deg), got " +
+                                           std::to_string(n.size()));
+    }
+    case Dialect::Fanuc: {
+      auto v = parseNumbers(text);
+      if (!v) return std::unexpected(v.error());
+      const auto& n = *v;
+      if (n.size() != 6) return fail(Status::BadArgument, "pose needs 6 numbers (x, y, z mm, w, p, r deg), got " + std::to_string(n.size()));
+      return poseFromEulerChecked(n[0], n[1], n[2], n[3], n[4], n[5], false);
+    }
+    case Dialect::Binary:
+      break;
+  }
+  return fail(Status::BadArgument, "the binary dialect has no text pose");
+}
+
+Result<Pose> parseStrictPoseFrame(std::string_view text) {
+  std::string_view body = text;
+  if (!unwrap(body, "(", ")") && !unwrap(body, "p[", "]"))
+    return fail(Status::BadArgument, "pose frame: expected (x,y,z,rx,ry,rz) or p[x, y, z, rx, ry, rz]");
+  auto v = parseNumbers(body);
+  if (!v) return std::unexpected(v.error());
+  if (v->size() != 6) return fail(Status::BadArgument, "pose frame needs 6 numbers, got " + std::to_string(v->size()));
+  return poseFromMetresRotationVector(*v);
+}
+
+Result<RobotRequest> parseRequest(std::string_view line, Dialect dialect) {
+  // Command, job and the rest (a pose holds commas of its own).
+  const std::size_t c1 = line.find(',');
+  const std::string_view command = trim(line.substr(0, c1));
+  const bool hasJob = c1 != std::string_view::npos;
+  std::string_view jobText, rest;
+  bool hasRest = false;
+  if (hasJob) {
+    const std::string_view afterCommand = line.substr(c1 + 1);
+    const std::size_t c2 = afterCommand.find(',');
+    jobText = trim(afterCommand.substr(0, c2));
+    if (c2 != std::string_view::npos) {
+      rest = afterCommand.substr(c2 + 1);
+      hasRest = true;
+    }
   }
 
   RobotRequest req;
-  if (fields[0] == "JOB") {
-    if (count < 2) return fail(Status::BadArgument, "missing job number");
-    if (count > 2) return fail(Status::BadArgument, "too many fields");
-    auto job = parseJob(fields[1]);
+  if (command == "JOB") {
+    if (!hasJob) return fail(Status::BadArgument, "missing job number");
+    if (hasRest) return fail(Status::BadArgument, "too many fields");
+    auto job = parseJob(jobText);
     if (!job) return std::unexpected(job.error());
     req.command = Command::Job;
     req.job = *job;
     return req;
   }
-  if (fields[0] == "TRIG") {
-    req.command = Command::Trigger;
-    if (count == 1) return req;  // "TRIG": the robot's current job
-    if (count > 2) return fail(Status::BadArgument, "too many fields");
-    auto job = parseJob(fields[1]);
-    if (!job) return std::unexpected(job.error());
-    req.job = *job;
-    return req;
-  }
-  if (fields[0] != "GET") return fail(Status::UnknownCommand, "unknown command");
-  if (count == 1) return req;  // "GET": the robot's current job
-
-  auto job = parseJob(fields[1]);
+  if (command != "TRIG" && command != "GET") return fail(Status::UnknownCommand, "unknown command");
+  req.command = command == "TRIG" ? Command::Trigger : Command::Get;
+  if (!hasJob) return req;  // "GET" / "TRIG": the robot's current job
+  auto job = parseJob(jobText);
   if (!job) return std::unexpected(job.error());
   req.job = *job;
-  if (count == 3) {
-    if (fields[2] != "LAST") return fail(Status::BadArgument, "unknown option (expected LAST)");
+  if (!hasRest) return req;
+  if (req.command == Command::Get && trim(rest) == "LAST") {
     req.last = true;
-  } else if (count > 3) {
-    return fail(Status::BadArgument, "too many fields");
+    return req;
   }
+  // A snapshot: the flange pose at the image, in the dialect's notation.
+  auto pose = parsePose(dialect, rest);
+  if (!pose) {
+    if (req.command == Command::Get && rest.find(',') == std::string_view::npos && rest.find('[') == std::string_view::npos)
+      return fail(Status::BadArgument, "unknown option (expected LAST or a flange pose)");
+    return std::unexpected(pose.error());
+  }
+  req.command = Command::Trigger;
+  req.flange = *pose;
   return req;
 }
 
@@ -333,13 +486,18 @@ std::int32_t readInt32(std::string_view frame, std::size_t at) {
   return static_cast<std::int32_t>(u);
 }
 
-std::string encodeRequest(std::int32_t command, std::int32_t job) {
+std::string encodeRequest(std::int32_t command, std::int32_t job, const std::optional<Pose>& flange) {
   std::string out;
-  out.reserve(kRequestBytes);
+  out.reserve(kPoseRequestBytes);
   appendInt32(out, static_cast<std::int32_t>(kRequestMagic));
-  appendInt32(out, static_cast<std::int32_t>(kRequestBytes));
+  appendInt32(out, static_cast<std::int32_t>(flange ? kPoseRequestBytes : kRequestBytes));
   appendInt32(out, command);
   appendInt32(out, job);
+  if (flange) {
+    const EulerZyxDeg e = toEulerZyxDeg(*flange);
+    const double values[6] = {flange->x, flange->y, flange->z, e.rx, e.ry, e.rz};
+    for (double v : values) appendInt32(out, static_cast<std::int32_t>(std::llround(v * 1000.0)));
+  }
   return out;
 }
 
@@ -365,7 +523,7 @@ std::optional<Result<RobotRequest>> RequestDecoder::next() {
     std::optional<Result<std::string>> line = text_.next();
     if (!line) return std::nullopt;
     if (!*line) return Result<RobotRequest>(std::unexpected(std::move(line->error())));
-    return parseRequest(**line);
+    return parseRequest(**line, dialect_);
   }
 
   std::string magic;
@@ -384,21 +542,44 @@ std::optional<Result<RobotRequest>> RequestDecoder::next() {
     }
     if (at == std::string::npos) return std::nullopt;
   }
-  if (bin_.size() < binary::kRequestBytes) return std::nullopt;
-  inGarbage_ = false;
-
-  const std::string_view frame(bin_.data(), binary::kRequestBytes);
-  const std::int32_t length = binary::readInt32(frame, 4);
-  const std::int32_t command = binary::readInt32(frame, 8);
-  const std::int32_t job = binary::readInt32(frame, 12);
-  if (length != static_cast<std::int32_t>(binary::kRequestBytes)) {
+  if (bin_.size() < 8) return std::nullopt;
+  const std::int32_t length = binary::readInt32(bin_, 4);
+  if (length != static_cast<std::int32_t>(binary::kRequestBytes) &&
+      length != static_cast<std::int32_t>(binary::kPoseRequestBytes)) {
     // The frame boundary is unknown: skip only the magic and look for the next one.
     // One bad frame, one error: what follows up to the next magic is not reported again.
     bin_.erase(0, 4);
     inGarbage_ = true;
-    return Result<RobotRequest>(fail(Status::BadArgument, "binary request length is not 16"));
+    return Result<RobotRequest>(fail(Status::BadArgument, "binary request length is not 16 or 40"));
   }
-  bin_.erase(0, binary::kRequestBytes);
+  const auto frameBytes = static_cast<std::size_t>(length);
+  if (bin_.size() < frameBytes) return std::nullopt;
+  inGarbage_ = false;
+
+  const std::string_view frame(bin_.data(), frameBytes);
+  const std::int32_t command = binary::readInt32(frame, 8);
+  const std::int32_t job = binary::readInt32(frame, 12);
+  std::optional<Pose> flange;
+  if (frameBytes == binary::kPoseRequestBytes) {
+    double v[6];
+    for (std::size_t i = 0; i < 6; ++i) v[i] = binary::readInt32(frame, 16 + 4 * i) / 1000.0;  // mm, degrees
+    flange = poseFromEulerZyxDeg(v[0], v[1], v[2], EulerZyxDeg{v[5], v[4], v[3]});
+    const bool angles = std::abs(v[3]) <= 360.0 && std::abs(v[4]) <= 360.0 && std::abs(v[5]) <= 360.0;
+    const bool position = std::abs(v[0]) <= kMaxAbsPositionMm && std::abs(v[1]) <= kMaxAbsPositionMm &&
+                          std::abs(v[2]) <= kMaxAbsPositionMm;
+    bin_.erase(0, frameBytes);
+    if (command != binary::kCmdGet && command != binary::kCmdTrigger)
+      return Result<RobotRequest>(fail(Status::BadArgument, "a flange pose goes with GET or TRIG only"));
+    if (!angles) return Result<RobotRequest>(fail(Status::BadArgument, "pose angle beyond +-360 degrees: not a rotation a controller sends"));
+    if (!position) return Result<RobotRequest>(fail(Status::BadArgument, "pose position beyond +-99999.999 mm"));
+    if (job < kMinJob || job > kMaxJob) return Result<RobotRequest>(fail(Status::BadArgument, "a snapshot needs a job in [1, 32767]"));
+    RobotRequest req;
+    req.command = Command::Trigger;
+    req.job = job;
+    req.flange = flange;
+    return Result<RobotRequest>(req);
+  }
+  bin_.erase(0, frameBytes);
 
   RobotRequest req;
   switch (command) {
@@ -441,7 +622,7 @@ void appendLabelText(std::string& out, int label, double confidence) {
 
 }  // namespace
 
-std::string formatReply(Dialect dialect, const RobotReply& reply, bool withLabel) {
+std::string formatReply(Dialect dialect, const RobotReply& reply, bool withLabel, AbbRotation abbRotation) {
   int status = statusCode(reply.status);
   bool zeroPose = reply.status != Status::Ok;
   if (!zeroPose && !representable(reply.pose)) {
@@ -505,12 +686,16 @@ std::string formatReply(Dialect dialect, const RobotReply& reply, bool withLabel
       return out;
     }
     case Dialect::Abb: {
-      std::string out = formatAbb(status, reply.cycleId, reply.pose, zeroPose);
+      const auto format = abbRotation == AbbRotation::Quaternion ? &formatAbbQuaternion : &formatAbb;
+      std::string out = format(status, reply.cycleId, reply.pose, zeroPose);
       if (withLabel) appendLabelText(out, label, confidence);
-      // Unreachable for the daemon's cycle ids (< 2^23: Ok replies are at most 68 characters,
-      // 78 with the label); kept so that no bound can ever send RAPID a truncated reply.
+      // Z-Y-X: unreachable for the daemon's cycle ids (< 2^23: Ok replies are at most 68
+      // characters, 78 with the label). Quaternion: at most 78 characters without the label,
+      // 88 with it, so a far pose with a label would not fit: config/ refuses abb_rotation
+      // quaternion together with reply_label, and this keeps any caller from sending RAPID a
+      // truncated reply.
       if (out.size() > kAbbMaxReplyChars) {
-        out = formatAbb(statusCode(Status::Internal), reply.cycleId, reply.pose, true);
+        out = format(statusCode(Status::Internal), reply.cycleId, reply.pose, true);
         if (withLabel) appendLabelText(out, 0, 0.0);
       }
       return out;

@@ -14,7 +14,7 @@
 #include "core/pose.hpp"
 #include "core/result.hpp"
 #include "core/status.hpp"
-#include "protocol/wire_types.hpp"  // Dialect
+#include "protocol/wire_types.hpp"  // Dialect, AbbRotation
 
 namespace vgr::protocol {
 
@@ -66,50 +66,79 @@ enum class Command {
   Get,      // "GET[,<job>[,LAST]]": the next part (or, with LAST, the latest reply again)
   Job,      // "JOB,<job>": switch this robot's current job (what "GET" without a job means)
   Trigger,  // "TRIG[,<job>]": start a cycle of the job and answer with its result (a robot
-            // asking for a part, with no PLC in the loop)
+            // asking for a part, with no PLC in the loop); "TRIG,<job>,<pose>" (or
+            // "GET,<job>,<pose>") is an eye-in-hand snapshot: the flange pose at the image
 };
 
 struct RobotRequest {
   Command command = Command::Get;
   int job = 0;        // [kMinJob, kMaxJob]; 0 only for "GET" = the robot's current job
   bool last = false;  // "GET,<job>,LAST": deliver the latest reply again
+  // Eye-in-hand snapshot: T_base_flange when the robot asked (mm + unit quaternion), in the
+  // frame the hand-eye calibration's robot poses were given in. Only with Command::Trigger.
+  std::optional<Pose> flange;
 };
 
+// A pose as a robot sends it in a request, in its dialect's own notation (docs/protocols.md,
+// "Eye-in-hand snapshots"):
+//   ur, strict: x, y, z in metres and a rotation vector in radians: 6 numbers, or the way
+//               URScript prints a pose, "p[x, y, z, rx, ry, rz]"
+//   abb:   x, y, z in mm and a quaternion q1, q2, q3, q4 (w, x, y, z: a RAPID orient; 7
+//          numbers), or Z-Y-X Euler degrees rz, ry, rx (6 numbers, the reply's order), or
+//          RAPID's ValToStr of a pose "[[x,y,z],[q1,q2,q3,q4]]"
+//   fanuc: x, y, z in mm and W, P, R in degrees, R = Rz(R)·Ry(P)·Rx(W) (6 numbers)
+// Numbers: decimal, optional sign, fraction and exponent, blanks around them allowed.
+// Errors (Status::BadArgument, the message says which field and why): a wrong count, not a
+// number, not finite, |x|, |y| or |z| beyond kMaxAbsPositionMm, and rotations that are not
+// rotations: a quaternion whose norm is off 1 by more than kMaxQuaternionNormError, an Euler
+// angle beyond +-360 degrees, a rotation vector longer than 2 pi. The binary dialect has no
+// text pose (its 40-byte request frame carries one).
+inline constexpr double kMaxQuaternionNormError = 1e-3;
+Result<Pose> parsePose(Dialect dialect, std::string_view text);
+
 // Parses one request line (terminator already removed): "GET", "GET,<job>",
-// "GET,<job>,LAST", "JOB,<job>", "TRIG" or "TRIG,<job>". Commands and LAST are case-sensitive; spaces and tabs
-// around fields are tolerated; job is a decimal integer in [1, 32767] without sign.
+// "GET,<job>,LAST", "JOB,<job>", "TRIG", "TRIG,<job>", and the eye-in-hand snapshot
+// "TRIG,<job>,<pose>" (also written "GET,<job>,<pose>"; both become Command::Trigger with
+// `flange`), the pose in `dialect`'s notation (parsePose). Commands and LAST are
+// case-sensitive; spaces and tabs around fields are tolerated; job is a decimal integer in
+// [1, 32767] without sign.
 // Errors: an unknown command -> Status::UnknownCommand (-1); a bad, empty or out-of-range
-// job or an unexpected extra field -> Status::BadArgument (-2).
-Result<RobotRequest> parseRequest(std::string_view line);
+// job, a bad pose or an unexpected extra field -> Status::BadArgument (-2).
+// `dialect` only decides how a pose is read (irrelevant for requests without one).
+Result<RobotRequest> parseRequest(std::string_view line, Dialect dialect = Dialect::Ur);
 
 // The `binary` dialect (docs/protocols.md has the byte-by-byte layout). Every field is an
 // int32, big-endian (network order), so URScript's socket_read_binary_integer and RAPID's
 // UnpackRawBytes \IntX:=DINT \Network read each one directly.
 //   request, 16 bytes: magic 'VGRQ' (0x56475251), length 16, command, job
+//   request with a flange pose (eye-in-hand snapshot), 40 bytes: magic, length 40, command
+//                      (GET or TRIG), job, x, y, z in µm, w, p, r in millidegrees
 //   reply,   40 bytes: magic 'VGRA' (0x56475241), length 40, status, cycle,
 //                      x, y, z in µm, w, p, r in millidegrees (R = Rz(r)·Ry(p)·Rx(w))
 namespace binary {
 inline constexpr std::uint32_t kRequestMagic = 0x56475251;  // "VGRQ"
 inline constexpr std::uint32_t kReplyMagic = 0x56475241;    // "VGRA"
 inline constexpr std::size_t kRequestBytes = 16;
+inline constexpr std::size_t kPoseRequestBytes = 40;
 inline constexpr std::size_t kReplyBytes = 40;
 inline constexpr std::size_t kLabelReplyBytes = 48;  // withLabel: + label, + confidence x 1000
 inline constexpr std::int32_t kCmdGet = 1;      // job 0 = the robot's current job
 inline constexpr std::int32_t kCmdGetLast = 2;  // job 0 = the robot's current job
 inline constexpr std::int32_t kCmdJob = 3;      // job in [1, 32767]
 inline constexpr std::int32_t kCmdTrigger = 4;  // job 0 = the robot's current job
-// Encodes a request frame (robot side; used by tests and vgr-sim-robot).
-std::string encodeRequest(std::int32_t command, std::int32_t job);
+// Encodes a request frame (robot side; used by tests and vgr-sim-robot); with `flange` the
+// 40-byte frame (µm and millidegrees, rounded).
+std::string encodeRequest(std::int32_t command, std::int32_t job, const std::optional<Pose>& flange = std::nullopt);
 // Reads the int32 at byte offset `at` of a frame (big-endian). Precondition: at + 4 <= size.
 std::int32_t readInt32(std::string_view frame, std::size_t at);
 }  // namespace binary
 
 // Turns a byte stream into requests for one dialect: text dialects through
-// RequestSplitter + parseRequest; `binary` through 16-byte frames. A binary stream that
-// does not start with the request magic yields ONE Status::UnknownCommand error per
+// RequestSplitter + parseRequest; `binary` through 16- and 40-byte frames. A binary stream
+// that does not start with the request magic yields ONE Status::UnknownCommand error per
 // run of garbage and resynchronises at the next magic; a frame with a wrong length, an
-// unknown command or a bad job yields Status::BadArgument / UnknownCommand and the frame
-// is skipped. Memory held: bounded by the splitter's limit or kMaxRequestBytes.
+// unknown command, a bad job or a pose with a command other than GET and TRIG yields
+// Status::BadArgument / UnknownCommand and the frame is skipped. Memory held: bounded by the splitter's limit or kMaxRequestBytes.
 class RequestDecoder {
  public:
   explicit RequestDecoder(Dialect dialect);
@@ -149,6 +178,9 @@ inline constexpr std::size_t kFanucLabelReplyChars = 85;
 //  abb: "<status>,<cycle>,<x>,<y>,<z>,<rz>,<ry>,<rx>", mm and Z-Y-X Euler degrees
 //       (OrientZYX(rz, ry, rx)), 3 decimals, at most 80 characters. Matches
 //       -?\d+,\d+(,-?\d+\.\d{3}){6}
+//       With AbbRotation::Quaternion: "<status>,<cycle>,<x>,<y>,<z>,<q1>,<q2>,<q3>,<q4>", mm
+//       with 3 decimals and the unit quaternion (w, x, y, z; q1 >= 0) with 5 decimals, at
+//       most 78 characters. Matches -?\d+,\d+(,-?\d+\.\d{3}){3}(,-?\d\.\d{5}){4}
 //  fanuc: fixed columns, sign-padded, then CR LF, always kFanucReplyChars (75) bytes:
 //       "+0000,0004711,+00512.300,-00120.050,+00035.000,+000.000,+000.000,-012.500\r\n"
 //       status cols 1-5, cycle 7-13, X 15-24, Y 26-35, Z 37-46 (mm), W 48-55, P 57-64,
@@ -173,7 +205,13 @@ inline constexpr std::size_t kFanucLabelReplyChars = 85;
 // The confidence has 3 decimals (x 1000 in binary); a reply that is not Ok carries 0 and
 // 0.000. A label outside [0, kMaxReplyLabel] or a confidence outside [0, 1] makes an Ok
 // reply Internal (-8) with zeros.
-std::string formatReply(Dialect dialect, const RobotReply& reply, bool withLabel = false);
+//
+// abbRotation (dialect abb only, cell.yaml robots[].abb_rotation): the rotation as Z-Y-X
+// Euler degrees rz, ry, rx (default) or the quaternion q1..q4 (w, x, y, z, 5 decimals, q1 >= 0).
+// A quaternion reply is at most 78 characters; with the label it can exceed 80, and then
+// becomes Internal (-8) with zeros (config/ refuses that combination).
+std::string formatReply(Dialect dialect, const RobotReply& reply, bool withLabel = false,
+                        AbbRotation abbRotation = AbbRotation::EulerZyx);
 
 // The strict dialect's pose frame (paper 002: "{x, y, z, Rx, Ry, Rz} encoded in a byte
 // frame"): "(<x>,<y>,<z>,<rx>,<ry>,<rz>)" in metres and a rotation vector in radians, 6
@@ -181,5 +219,11 @@ std::string formatReply(Dialect dialect, const RobotReply& reply, bool withLabel
 // Error (Status::Internal) for a pose the wire cannot carry (non-finite, beyond
 // kMaxAbsPositionMm).
 Result<std::string> formatStrictPoseFrame(const Pose& pose);
+
+// The strict dialect's snapshot pose (eye-in-hand): the robot's flange pose in the strict
+// frame notation, "(<x>,<y>,<z>,<rx>,<ry>,<rz>)" in metres and radians, or as URScript prints
+// a pose, "p[x, y, z, rx, ry, rz]" (socket_send_string(get_actual_tool_flange_pose())).
+// `text` is exactly the frame. Errors as parsePose.
+Result<Pose> parseStrictPoseFrame(std::string_view text);
 
 }  // namespace vgr::protocol

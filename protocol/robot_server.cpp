@@ -278,7 +278,7 @@ class RequestSession final : public Session {
 
   void deliverAwaited(const RobotReply& reply) override {
     awaitingReply_ = false;
-    writeBytes(formatReply(server_->endpoint.dialect, reply, server_->endpoint.replyLabel));
+    writeBytes(formatReply(server_->endpoint.dialect, reply, server_->endpoint.replyLabel, server_->endpoint.abbRotation));
     advance();
   }
 
@@ -352,7 +352,7 @@ class RequestSession final : public Session {
                  item.error().message);
       RobotReply r;
       r.status = item.error().code;
-      writeBytes(formatReply(server_->endpoint.dialect, r, server_->endpoint.replyLabel));
+      writeBytes(formatReply(server_->endpoint.dialect, r, server_->endpoint.replyLabel, server_->endpoint.abbRotation));
       return;
     }
     if (!budget_.take()) {  // over the connection's request rate: served when a token comes
@@ -497,6 +497,13 @@ class StrictSession final : public Session {
       log::error("robot", "robot '{}': cycle {}: {}; not sent", server_->endpoint.name, reply.cycleId,
                  frame.error().message);
     }
+    if (exchange_.snapshotMode()) {
+      // The robot waits for an answer to its snapshot: tell it there is nothing to move.
+      const Status st = reply.status == Status::Ok ? Status::Internal : reply.status;
+      log::debug("robot", "robot '{}': snapshot cycle {} ended {}", server_->endpoint.name, reply.cycleId, statusCode(st));
+      writeBytes(exchange_.noResult(st));  // onWritten() settles the reply as delivered
+      return;
+    }
     // Statuses are not pushed in this dialect: consumed as they are.
     settleWritten(true);
     // Nothing to move. Statuses 2 and 3 came after the reply deadline: ask again at once;
@@ -513,8 +520,18 @@ class StrictSession final : public Session {
 
  private:
   void ask() {
+    // Snapshot mode: the robot drives (onSnapshot); push mode: GET whenever idle.
+    if (exchange_.snapshotMode()) return;
     if (closed_ || awaitingReply_ || exchange_.step() != StrictExchange::Step::Idle) return;
     RobotRequest req;  // GET of the robot's current job
+    callHandler(req);
+  }
+
+  void onSnapshot(const Pose& flange) {
+    if (closed_ || awaitingReply_) return;
+    RobotRequest req;  // TRIG of the robot's current job, with the flange pose of the image
+    req.command = Command::Trigger;
+    req.flange = flange;
     callHandler(req);
   }
 
@@ -561,6 +578,15 @@ class StrictSession final : public Session {
       if (e.kind == StrictExchange::EventKind::Unexpected) {
         log::warn("robot", "robot '{}': {} sent '{}' while no exchange was running; ignored", server_->endpoint.name,
                   peer_, e.detail);
+        continue;
+      }
+      if (e.kind == StrictExchange::EventKind::Snapshot) {
+        onSnapshot(e.pose);
+        continue;
+      }
+      if (e.kind == StrictExchange::EventKind::BadSnapshot) {
+        log::warn("robot", "robot '{}': {}: {}; answered {}", server_->endpoint.name, peer_, e.detail, statusCode(e.status));
+        if (!writing_) writeBytes(exchange_.noResult(e.status));
         continue;
       }
       finish(std::move(e));

@@ -52,6 +52,8 @@ struct RobotEndpoint {
   // request in progress, is closed (ms; 0 = never). Not applied to the strict dialect
   // (vgrd speaks first there; its step timeout covers a silent robot).
   int idleTimeoutMs = 0;
+  // Abb dialect only: how a reply writes the rotation (Z-Y-X Euler or quaternion).
+  AbbRotation abbRotation = AbbRotation::EulerZyx;
   // Request dialects: the bytes of a request must be complete this long after the first of
   // them arrived, else the connection is closed (ms, > 0). A robot writes a request at
   // once; a peer dribbling bytes (slowloris) or sending a line that never ends holds its
@@ -121,7 +123,9 @@ class ReplyFn {
 // Strict dialect: the session itself asks, with GET (job 0 = the robot's current job),
 // whenever it is idle; a reply with status Ok is pushed to the robot through the four-step
 // exchange, any other reply is not sent (statuses 2 and 3 re-ask at once, others after a
-// short pause).
+// short pause). With strict.snapshot set it asks only when the robot sent a snapshot: TRIG
+// (job 0) with the robot's flange pose; a reply that is not Ok goes to the robot as
+// "<none>(<status>)".
 using RequestHandler = std::function<void(const std::string& robotName, const RobotRequest& req, ReplyFn reply)>;
 
 // What one peer can make the I/O thread do is bounded (docs/robustness.md): an endpoint

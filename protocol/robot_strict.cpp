@@ -1,5 +1,7 @@
 #include "protocol/robot_strict.hpp"
 
+#include "protocol/robot_codec.hpp"  // parseStrictPoseFrame
+
 #include <algorithm>
 #include <utility>
 
@@ -33,6 +35,8 @@ StrictExchange::StrictExchange(StrictTokens tokens) : tokens_(std::move(tokens))
 
 const std::string& StrictExchange::expected() const {
   switch (step_) {
+    case Step::AwaitResult:
+      break;
     case Step::AwaitReady:
       return tokens_.ready;
     case Step::AwaitDone:
@@ -48,6 +52,12 @@ std::string StrictExchange::begin(std::string poseFrame) {
   rx_.clear();  // whatever came while idle was already reported and is not an answer
   step_ = Step::AwaitReady;
   return tokens_.command + tokens_.lineEnd;
+}
+
+std::string StrictExchange::noResult(Status status) {
+  step_ = Step::Idle;
+  poseFrame_.clear();
+  return tokens_.none + "(" + std::to_string(statusCode(status)) + ")" + tokens_.lineEnd;
 }
 
 void StrictExchange::feed(std::string_view bytes) { rx_.append(bytes); }
@@ -69,7 +79,8 @@ StrictExchange::Event StrictExchange::poll() {
   rx_.erase(0, skip);
   if (rx_.empty()) return {};
 
-  if (step_ == Step::Idle) {
+  if (step_ == Step::Idle && snapshotMode()) return pollSnapshot();
+  if (step_ == Step::Idle || step_ == Step::AwaitResult) {
     Event e;
     e.kind = EventKind::Unexpected;
     e.detail = printable(rx_);
@@ -111,14 +122,62 @@ StrictExchange::Event StrictExchange::poll() {
   return e;
 }
 
+StrictExchange::Event StrictExchange::pollSnapshot() {
+  // rx_ starts with a non-separator. "<snapshot>" then blanks, then "(...)" or "p[...]".
+  const std::string& want = tokens_.snapshot;
+  const std::size_t n = std::min(rx_.size(), want.size());
+  Event e;
+  if (rx_.compare(0, n, want, 0, n) != 0) {
+    e.kind = EventKind::Unexpected;
+    e.detail = printable(rx_);
+    rx_.clear();
+    return e;
+  }
+  if (rx_.size() < want.size()) return {};
+  std::size_t at = want.size();
+  while (at < rx_.size() && isSeparator(rx_[at])) ++at;
+  if (at == rx_.size()) return {};
+  const char open = rx_[at];
+  if (open != '(' && open != 'p') {
+    e.kind = EventKind::BadSnapshot;
+    e.status = Status::BadArgument;
+    e.detail = fmt::format("'{}' must be followed by the flange pose (x,y,z,rx,ry,rz), got '{}'", want,
+                           printable(std::string_view(rx_).substr(at)));
+    rx_.clear();
+    return e;
+  }
+  const std::size_t close = rx_.find(open == '(' ? ')' : ']', at);
+  if (close == std::string::npos) {
+    if (rx_.size() - at <= kMaxStrictPoseFrameChars) return {};  // the rest of the frame is on its way
+    e.kind = EventKind::BadSnapshot;
+    e.status = Status::BadArgument;
+    e.detail = fmt::format("no end of the pose frame within {} bytes after '{}'", kMaxStrictPoseFrameChars, want);
+    rx_.clear();
+    return e;
+  }
+  const std::string frame = rx_.substr(at, close + 1 - at);
+  rx_.erase(0, close + 1);
+  auto pose = parseStrictPoseFrame(frame);
+  if (!pose) {
+    e.kind = EventKind::BadSnapshot;
+    e.status = pose.error().code;
+    e.detail = fmt::format("snapshot pose '{}': {}", printable(frame), pose.error().message);
+    return e;
+  }
+  step_ = Step::AwaitResult;
+  e.kind = EventKind::Snapshot;
+  e.pose = *pose;
+  return e;
+}
+
 StrictExchange::Event StrictExchange::onTimeout() {
-  if (step_ == Step::Idle) return {};
+  if (step_ == Step::Idle || step_ == Step::AwaitResult) return {};
   const std::string partial = rx_.empty() ? std::string() : fmt::format(" (received '{}')", printable(rx_));
   return failNow(Status::ProcessingTimeout, fmt::format("no '{}' within the step timeout{}", expected(), partial));
 }
 
 StrictExchange::Event StrictExchange::onClosed() {
-  if (step_ == Step::Idle) return {};
+  if (step_ == Step::Idle || step_ == Step::AwaitResult) return {};
   return failNow(Status::Internal, fmt::format("connection lost while waiting for '{}'", expected()));
 }
 

@@ -23,6 +23,13 @@ std::optional<Dialect> parseDialect(std::string_view text);
 // The cell.yaml spelling.
 std::string_view dialectName(Dialect dialect);
 
+// How the abb dialect writes a rotation (cell.yaml robots[].abb_rotation): Z-Y-X Euler
+// degrees rz, ry, rx for OrientZYX (default), or the quaternion q1..q4 (w, x, y, z) of a
+// RAPID orient. Requests carrying a pose may use either, whatever this says.
+enum class AbbRotation { EulerZyx, Quaternion };
+// "zyx" or "quaternion" (the cell.yaml spelling); nullopt otherwise.
+std::optional<AbbRotation> parseAbbRotation(std::string_view text);
+std::string_view abbRotationName(AbbRotation rotation);
 // What a robot endpoint receives for a part (docs/protocols.md, "Offsets and frames";
 // protocol/robot_frames.hpp does the arithmetic): the part's pose in the endpoint's user
 // frame, or the offset from the job's taught reference in the dialect's convention.

@@ -10,7 +10,9 @@
 #include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <cmath>
 #include <filesystem>
+#include <map>
 #include <mutex>
 #include <thread>
 #include <vector>
@@ -20,7 +22,11 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <fmt/format.h>
+
+#include "config/depth_dataset.hpp"
 #include "core/log.hpp"
+#include "sim/camera/depth_xml.hpp"
 
 namespace vgr::sim {
 
@@ -34,6 +40,12 @@ struct CameraEmulator::Impl {
   std::atomic<std::uint64_t> served{0};
   std::FILE* truth = nullptr;
   std::mutex lineMutex;
+  // Depth camera: the data set's images (CV_16UC1), their names and truth.
+  bool depthMode = false;
+  config::DepthCameraFile depthCamera;
+  std::vector<cv::Mat> depthImages;
+  std::vector<std::string> depthNames;
+  std::map<std::string, std::vector<Pose>> depthTruth;  // by image name; an image without a part: none
 
   Impl(CellScenes s, EmulatorOptions o) : scenes(std::move(s)), options(std::move(o)) {}
 
@@ -72,6 +84,96 @@ struct CameraEmulator::Impl {
     return frame16;
   }
 
+  // The depth frame `frameId` (Coord3D_C16: the data set's 16-bit values, little-endian).
+  void fillDepth(std::uint8_t* out, std::uint64_t frameId, int x, int y, int w, int h, ArvPixelFormat format) {
+    if (format != ARV_PIXEL_FORMAT_COORD3D_C_16) {
+      log::warn("sim", "fill: the depth camera serves Coord3D_C16 only, not pixel format 0x{:x}", static_cast<unsigned>(format));
+      return;
+    }
+    const std::size_t index = (frameId + depthImages.size() - 1) % depthImages.size();
+    const cv::Mat& src = depthImages[index];
+    const std::size_t row = static_cast<std::size_t>(w) * 2;
+    for (int r = 0; r < h; ++r) std::memcpy(out + r * row, src.ptr(y + r) + static_cast<std::size_t>(x) * 2, row);
+    served++;
+    if (!truth) return;
+    std::string parts;
+    for (const Pose& p : depthTruth[depthNames[index]])
+      parts += fmt::format("{}{{\"x_mm\":{:.4f},\"y_mm\":{:.4f},\"z_mm\":{:.4f},\"qw\":{:.9f},\"qx\":{:.9f},\"qy\":{:.9f},\"qz\":{:.9f}}}",
+                           parts.empty() ? "" : ",", p.x, p.y, p.z, p.qw, p.qx, p.qy, p.qz);
+    std::fprintf(truth, "{\"frame_id\":%llu,\"image\":\"%s\",\"parts\":[%s]}\n", static_cast<unsigned long long>(frameId),
+                 depthNames[index].c_str(), parts.c_str());
+    std::fflush(truth);
+  }
+
+  // The data set: camera.yaml, every image (16-bit, camera.yaml's size), truth.csv if any.
+  Result<void> loadDepthDataset() {
+    const std::string& dir = options.depthDataset;
+    auto cam = config::loadDepthCameraFile((std::filesystem::path(dir) / "camera.yaml").string());
+    if (!cam) return fail(Status::BadArgument, "camera emulator: " + cam.error().message);
+    const DepthIntrinsics k = cam->intrinsics();
+    if (std::abs(k.fx - k.fy) > 1e-9 * k.fx)
+      return fail(Status::BadArgument, fmt::format("camera emulator: {}/camera.yaml: fx {} and fy {} differ, but a GenICam "
+                                                   "depth camera has one Scan3dFocalLength",
+                                                   dir, k.fx, k.fy));
+    auto names = config::listDepthImages(dir);
+    if (!names) return fail(Status::BadArgument, "camera emulator: " + names.error().message);
+    for (const auto& n : *names) {
+      const std::string path = (std::filesystem::path(dir) / n).string();
+      cv::Mat img = cv::imread(path, cv::IMREAD_UNCHANGED);
+      if (img.type() != CV_16UC1)
+        return fail(Status::BadArgument, "camera emulator: " + path + ": not a 16-bit single-channel depth image");
+      if (img.cols != cam->width || img.rows != cam->height)
+        return fail(Status::BadArgument, fmt::format("camera emulator: {}: {}x{} px, camera.yaml says {}x{}", path, img.cols,
+                                                     img.rows, cam->width, cam->height));
+      depthImages.push_back(img);
+      depthNames.push_back(n);
+    }
+    const std::string truthPath = (std::filesystem::path(dir) / "truth.csv").string();
+    if (std::filesystem::exists(truthPath)) {
+      auto rows = config::loadDepthTruth(truthPath);
+      if (!rows) return fail(Status::BadArgument, "camera emulator: " + rows.error().message);
+      for (const auto& r : *rows) {
+        auto& parts = depthTruth[r.image];
+        if (r.hasPart) parts.push_back(r.pose);
+      }
+    }
+    depthCamera = *cam;
+    depthMode = true;
+    return {};
+  }
+
+  // The extended GenICam XML, written where arv_gv_fake_camera_new_full reads it.
+  Result<std::string> writeDepthXml() {
+    ArvFakeCamera* stock = arv_fake_camera_new(options.serial.c_str());
+    size_t size = 0;
+    const char* text = stock ? arv_fake_camera_get_genicam_xml(stock, &size) : nullptr;
+    std::string xml = text ? std::string(text, size) : std::string();
+    if (stock) g_object_unref(stock);
+    auto patched = depthCameraXml(xml);
+    if (!patched) return std::unexpected(patched.error());
+    const std::string path = (std::filesystem::temp_directory_path() /
+                              fmt::format("vgr-sim-depth-{}-{}.xml", ::getpid(), options.serial))
+                                 .string();
+    std::FILE* f = std::fopen(path.c_str(), "w");
+    if (!f || std::fwrite(patched->data(), 1, patched->size(), f) != patched->size()) {
+      if (f) std::fclose(f);
+      return fail(Status::Internal, "camera emulator: cannot write " + path);
+    }
+    std::fclose(f);
+    return path;
+  }
+
+  void writeU32(std::uint32_t address, std::uint32_t value) {
+    const guint32 be = GUINT32_TO_BE(value);
+    arv_fake_camera_write_memory(arv_gv_fake_camera_get_fake_camera(camera), address, 4, &be);
+  }
+  void writeF64(std::uint32_t address, double value) {
+    guint64 bits = 0;
+    std::memcpy(&bits, &value, 8);
+    bits = GUINT64_TO_BE(bits);
+    arv_fake_camera_write_memory(arv_gv_fake_camera_get_fake_camera(camera), address, 8, &bits);
+  }
+
   // Aravis' fake camera thread, once per frame, with the fake camera's fill-pattern mutex held.
   static void fill(ArvBuffer* buffer, void* data, guint32 /*exposureUs*/, guint32 /*gain*/, ArvPixelFormat format) {
     auto* self = static_cast<Impl*>(data);
@@ -81,6 +183,14 @@ struct CameraEmulator::Impl {
     const std::uint64_t frameId = arv_buffer_get_frame_id(buffer);
     gint x = 0, y = 0, w = 0, h = 0;
     arv_buffer_get_image_region(buffer, &x, &y, &w, &h);
+    if (self->depthMode) {
+      if (out == nullptr || x < 0 || y < 0 || w <= 0 || h <= 0 || x + w > self->width || y + h > self->height) {
+        log::warn("sim", "fill: region {}x{}+{}+{} outside the depth sensor", w, h, x, y);
+        return;
+      }
+      self->fillDepth(out, frameId, x, y, w, h, format);
+      return;
+    }
     const bool mono16 = format == ARV_PIXEL_FORMAT_MONO_16;
     const bool eightBit = format == ARV_PIXEL_FORMAT_MONO_8 || format == ARV_PIXEL_FORMAT_BAYER_RG_8 ||
                           format == ARV_PIXEL_FORMAT_BAYER_GR_8 || format == ARV_PIXEL_FORMAT_BAYER_GB_8 ||
@@ -192,7 +302,14 @@ Result<void> CameraEmulator::start() {
       return fail(Status::CameraError, "camera emulator: cannot bind GVCP port " + o.address + ":3956 (" +
                                            std::strerror(err) + "): another camera is serving there?");
   }
-  if (!o.imagesFolder.empty()) {
+  if (!o.depthDataset.empty()) {
+    if (!o.imagesFolder.empty()) return fail(Status::BadArgument, "camera emulator: a depth data set or an image folder, not both");
+    if (o.depthUnit != "Millimeter" && o.depthUnit != "Inch" && o.depthUnit != "Pixel")
+      return fail(Status::BadArgument, "camera emulator: depth unit '" + o.depthUnit + "': expected Millimeter, Inch or Pixel");
+    if (auto r = impl_->loadDepthDataset(); !r) return r;
+    impl_->width = impl_->depthCamera.width;
+    impl_->height = impl_->depthCamera.height;
+  } else if (!o.imagesFolder.empty()) {
     if (auto r = impl_->loadImages(); !r) return r;
     impl_->width = impl_->images.front().cols;
     impl_->height = impl_->images.front().rows;
@@ -205,7 +322,15 @@ Result<void> CameraEmulator::start() {
     if (!impl_->truth) return fail(Status::BadArgument, "camera emulator: cannot open truth file " + o.truthPath);
   }
 
-  impl_->camera = arv_gv_fake_camera_new(o.address.c_str(), o.serial.c_str());
+  if (impl_->depthMode) {
+    auto xml = impl_->writeDepthXml();
+    if (!xml) return std::unexpected(xml.error());
+    impl_->camera = arv_gv_fake_camera_new_full(o.address.c_str(), o.serial.c_str(), xml->c_str());
+    std::error_code ec;
+    std::filesystem::remove(*xml, ec);  // read at construction
+  } else {
+    impl_->camera = arv_gv_fake_camera_new(o.address.c_str(), o.serial.c_str());
+  }
   if (!impl_->camera || !arv_gv_fake_camera_is_running(impl_->camera))
     return fail(Status::CameraError, "camera emulator: Aravis could not start a fake GigE camera on " + o.address);
   // Aravis 0.8.26's fake GigE camera drops each GVSP packet with this probability.
@@ -222,9 +347,31 @@ Result<void> CameraEmulator::start() {
   arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_HEIGHT, h);
   arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_ACQUISITION_FRAME_PERIOD_US,
                                  static_cast<guint32>(1e6 / o.fps));
+  if (impl_->depthMode) {
+    // A depth camera from the start: Coord3D_C16 and its Scan3d features (depth_xml.hpp).
+    const auto& c = impl_->depthCamera;
+    const double perUnit = o.depthUnit == "Inch" ? c.depthScaleMm / 25.4 : c.depthScaleMm;
+    arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_PIXEL_FORMAT, kPixelFormatCoord3dC16);
+    impl_->writeU32(kScan3dDistanceUnit, o.depthUnit == "Millimeter" ? 0 : o.depthUnit == "Inch" ? 1 : 2);
+    impl_->writeU32(kScan3dCoordinateSelector, 2);
+    impl_->writeU32(kScan3dCoordinateSystem, 0);
+    impl_->writeU32(kScan3dOutputMode, 0);
+    impl_->writeU32(kScan3dInvalidDataFlag, 1);
+    impl_->writeF64(kScan3dCoordinateScale, perUnit);
+    impl_->writeF64(kScan3dCoordinateOffset, 0.0);
+    impl_->writeF64(kScan3dInvalidDataValue, 0.0);
+    impl_->writeF64(kScan3dFocalLength, c.fx);
+    impl_->writeF64(kScan3dPrincipalPointU, c.cx);
+    impl_->writeF64(kScan3dPrincipalPointV, c.cy);
+  }
   arv_fake_camera_set_fill_pattern(fake, &Impl::fill, impl_.get());
-  log::info("sim", "camera emulator {} serving {}x{} {} on {} (packet loss {}, free-run {} fps)", o.serial, w, h,
-            o.imagesFolder.empty() ? "rendered '" + impl_->scenes.mode() + "' scenes" : "images of " + o.imagesFolder, o.address, o.lossRatio, o.fps);
+  const std::string what = impl_->depthMode ? fmt::format("Coord3D_C16 depth images of {} ({} images, {} mm/unit, {})",
+                                                     o.depthDataset, impl_->depthImages.size(),
+                                                     impl_->depthCamera.depthScaleMm, o.depthUnit)
+                           : o.imagesFolder.empty() ? "rendered '" + impl_->scenes.mode() + "' scenes"
+                                                    : "images of " + o.imagesFolder;
+  log::info("sim", "camera emulator {} serving {}x{} {} on {} (packet loss {}, free-run {} fps)", o.serial, w, h, what,
+            o.address, o.lossRatio, o.fps);
   return {};
 }
 

@@ -1,6 +1,7 @@
 // vgr-sim-camera: GigE Vision cameras on loopback serving rendered scenes with known ground
 // truth (or the images of a folder): the config's `sim.scene` (plate, part or multi; see
-// sim/cell_scenes.hpp). With no arguments it serves the camera of the embedded
+// sim/cell_scenes.hpp). --depth DIR: a depth camera (Coord3D_C16 with the SFNC Scan3d
+// features) serving a 3D data set, truth per frame with --truth (sim/camera/emulator.hpp). With no arguments it serves the camera of the embedded
 // example cell (config/examples/sim-cell.yaml): address 127.0.0.1, serial VGR-SIM-0, seed 1.
 // Several cameras: --camera SERIAL@ADDRESS, repeated (one address each; camera i renders
 // with seed + i). SIGUSR1 = one edge on every camera's Line0 (simulated hardware trigger).
@@ -56,6 +57,11 @@ int main(int argc, char** argv) {
   app.add_option("--scene", scene, "what to show: plate, part (textured) or multi (height levels) (default: the config's sim.scene)")
       ->check(CLI::IsMember({"plate", "part", "multi"}));
   app.add_option("--images", imagesFolder, "serve the images of this folder (name order, looping) instead of scenes");
+  std::string depthDataset, depthUnit = "Millimeter";
+  app.add_option("--depth", depthDataset,
+                 "be a depth camera (Coord3D_C16, Scan3d features) serving this 3D data set (camera.yaml, images/, truth.csv)");
+  app.add_option("--depth-unit", depthUnit, "the Scan3dDistanceUnit served (tests of a camera the driver refuses)")
+      ->check(CLI::IsMember({"Millimeter", "Inch", "Pixel"}));
   app.add_flag("--still", still, "every frame shows frame 1's scene (only the noise changes): sim.still");
   app.add_option("--camera-shift", shift, "X,Y[,Z[,RZ]]: render through a camera moved by this many mm (deg): sim.camera_shift");
   app.add_option("--empty-every", emptyEvery, "every N-th frame shows the empty belt (no part): a cell where every N-th cycle fails")
@@ -115,6 +121,8 @@ int main(int argc, char** argv) {
     o.lossRatio = loss;
     o.fps = fps;
     o.imagesFolder = imagesFolder;
+    o.depthDataset = depthDataset;
+    o.depthUnit = depthUnit;
     o.emptyEvery = emptyEvery;
     if (i == 0) o.truthPath = truthPath;
     auto cell = *cfg;

@@ -5,7 +5,8 @@
 //           socket_read_ascii_float does.
 //   abb   : SocketSend \Str:="GET,<job>#"; SocketReceive \Str reads whatever is buffered, at
 //           most 80 characters, in ONE call: a reply split over two TCP segments, longer than
-//           80 characters or followed by stray bytes shows up as invalid.
+//           80 characters or followed by stray bytes shows up as invalid. --abb-rotation
+//           quaternion: the reply carries q1..q4 instead of rz, ry, rx.
 //   fanuc : WRITE "GET,<job>" CR LF; READ a line up to CR LF (KAREL file READ), which must be
 //           the 75-byte fixed-column reply that SUB_STR/CNV_STR_REAL take apart.
 //   binary: the 16-byte VGRQ request; reads exactly 40 bytes (socket_read_binary_integer(10))
@@ -16,6 +17,12 @@
 // got exactly the parts its part order says, against the emulator's truth and vgrd's journal
 // (sim/sort_check.hpp); the summary line gets a "check" object, and a failed check exits 1.
 // (`strict` is a push protocol, not a poll: tests/integration/robot_wire_test.cpp plays it.)
+// Every reply is parsed with all six degrees of freedom and printed as x, y, z mm and the
+// Z-Y-X Euler angles rz, ry, rx in degrees (the journal's convention), whatever the dialect's
+// own notation. --snapshot POSE makes each request an eye-in-hand snapshot,
+// "TRIG,<job>,<pose>", the flange pose written in the dialect's own notation (ur: URScript's
+// printed pose p[...] in m/rad; abb: RAPID's ValToStr [[x,y,z],[q1,q2,q3,q4]]; fanuc:
+// x,y,z,w,p,r as KAREL writes them; binary: the 40-byte request).
 //
 // --program FILE... --config CELL (abb, fanuc, ur): plays an example robot program of
 // examples/robot/ that applies offsets (sim/robot/robot_program.hpp): sends the program's
@@ -30,8 +37,10 @@
 // the daemon is re-opened (for up to 10 s) and the unanswered request sent again.
 // Exit: 0 all replies valid, 1 any invalid reply, 2 usage or connection failure.
 // Single-threaded: one io_context run by main().
+
 #include <algorithm>
 #include <array>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -56,6 +65,7 @@
 
 #include "config/cell_config.hpp"
 #include "core/log.hpp"
+#include "core/pose.hpp"
 #include "protocol/robot_codec.hpp"
 #include "protocol/robot_reply.hpp"
 #include "sim/robot/robot_program.hpp"
@@ -83,6 +93,8 @@ struct Options {
   int intervalMs = 100;
   int timeoutMs = 3000;
   bool json = false;
+  std::string abbRotation = "zyx";
+  std::string snapshot;  // "x,y,z,qw,qx,qy,qz" mm + quaternion: send TRIG with this flange pose
   std::vector<std::string> program;  // --program files
   std::string config;                // --config: the cell the program's robot is in
   bool replyLabel = false;
@@ -91,15 +103,18 @@ struct Options {
   std::string truthPath, journalPath;
 };
 
-// A reply checked against the dialect (protocol/robot_reply.hpp); the numbers are set only
-// when valid.
+// A reply checked against the dialect (protocol/robot_reply.hpp, shared with fuzz_robot_reply
+// and vgr soak: vgrd's forms and ranges); the numbers are set only when valid.
 struct Parsed {
   bool valid = false;
   std::string error;
   int status = 0;
   long long cycle = 0;
-  double xMm = 0, yMm = 0, zMm = 0, rzDeg = 0;
-  std::array<double, 6> values{};  // the six pose numbers as the dialect carries them
+  double xMm = 0, yMm = 0, zMm = 0, rzDeg = 0, ryDeg = 0, rxDeg = 0;
+  // The six pose numbers as the dialect carries them (ur m + rad rotation vector; abb zyx
+  // mm + rz, ry, rx deg; fanuc mm + W, P, R; binary µm + millidegrees / 1000), for --program.
+  // Not set for abb quaternion replies (--program refuses them).
+  std::array<double, 6> values{};
   int label = 0;
   double confidence = 0;
 };
@@ -109,11 +124,12 @@ double round3(double v) {
   return r == 0.0 ? 0.0 : r;  // no -0 in the output
 }
 
-// A reply checked against the dialect by the robot's-side parser (protocol/robot_reply.hpp,
-// shared with fuzz_robot_reply: vgrd's ranges), plain or reply_label.
-Parsed parseReply(Dialect dialect, const std::string& raw, bool withLabel) {
+Parsed parseReply(Dialect dialect, bool abbQuaternion, const std::string& raw, bool withLabel) {
   Parsed p;
-  const vgr::Result<vgr::protocol::ParsedReply> r = vgr::protocol::parseRobotReply(dialect, raw, withLabel);
+  vgr::protocol::ReplyForm form;
+  form.abbRotation = abbQuaternion ? vgr::protocol::AbbRotation::Quaternion : vgr::protocol::AbbRotation::EulerZyx;
+  form.withLabel = withLabel;
+  const vgr::Result<vgr::protocol::ParsedReply> r = vgr::protocol::parseRobotReply(dialect, raw, form);
   if (!r) {
     p.error = r.error().message;
     return p;
@@ -125,22 +141,45 @@ Parsed parseReply(Dialect dialect, const std::string& raw, bool withLabel) {
   p.yMm = r->yMm;
   p.zMm = r->zMm;
   p.rzDeg = r->rzDeg;
+  p.ryDeg = r->ryDeg;
+  p.rxDeg = r->rxDeg;
   p.values = r->values;
   p.label = r->label;
   p.confidence = r->confidence;
   return p;
 }
 
+// The flange pose as a robot program of the dialect writes it (see the top of the file).
+std::string snapshotPoseText(Dialect dialect, const vgr::Pose& f) {
+  switch (dialect) {
+    case Dialect::Abb:
+      return fmt::format("[[{:.3f},{:.3f},{:.3f}],[{:.6f},{:.6f},{:.6f},{:.6f}]]", f.x, f.y, f.z, f.qw, f.qx, f.qy, f.qz);
+    case Dialect::Fanuc: {
+      const vgr::EulerZyxDeg e = vgr::toEulerZyxDeg(f);
+      return fmt::format("{:10.3f},{:10.3f},{:10.3f},{:10.3f},{:10.3f},{:10.3f}", f.x, f.y, f.z, e.rx, e.ry, e.rz);
+    }
+    default: {
+      const vgr::Vec3 rv = vgr::toRotationVector(f);
+      return fmt::format("p[{:.6f}, {:.6f}, {:.6f}, {:.6f}, {:.6f}, {:.6f}]", f.x / 1000.0, f.y / 1000.0, f.z / 1000.0,
+                         rv.x, rv.y, rv.z);
+    }
+  }
+}
+
 class SimRobot {
  public:
-  SimRobot(asio::io_context& io, Options opt, Dialect dialect, std::optional<vgr::sim::RobotProgram> program)
+  SimRobot(asio::io_context& io, Options opt, Dialect dialect, const std::optional<vgr::Pose>& flange,
+           std::optional<vgr::sim::RobotProgram> program)
       : io_(io), opt_(std::move(opt)), dialect_(dialect), program_(std::move(program)), socket_(io), timer_(io),
         signals_(io, SIGINT, SIGTERM) {
+    namespace bin = vgr::protocol::binary;
+    const std::string what = flange ? "TRIG," + std::to_string(opt_.job) + "," + snapshotPoseText(dialect_, *flange)
+                                    : "GET," + std::to_string(opt_.job);
     switch (dialect_) {
-      case Dialect::Ur: request_ = "GET," + std::to_string(opt_.job) + "\n"; break;
-      case Dialect::Fanuc: request_ = "GET," + std::to_string(opt_.job) + "\r\n"; break;
-      case Dialect::Binary: request_ = vgr::protocol::binary::encodeRequest(vgr::protocol::binary::kCmdGet, opt_.job); break;
-      default: request_ = "GET," + std::to_string(opt_.job) + "#"; break;
+      case Dialect::Ur: request_ = what + "\n"; break;
+      case Dialect::Fanuc: request_ = what + "\r\n"; break;
+      case Dialect::Binary: request_ = bin::encodeRequest(flange ? bin::kCmdTrigger : bin::kCmdGet, opt_.job, flange); break;
+      default: request_ = what + "#"; break;
     }
     if (program_) request_ = program_->request;
   }
@@ -282,7 +321,7 @@ class SimRobot {
     if (setupLeft_ > 0) {
       // The answer to a setup request: status 0 or the program stops (RAPID: Stop).
       --setupLeft_;
-      const Parsed p = parseReply(dialect_, raw, opt_.replyLabel);
+      const Parsed p = parseReply(dialect_, opt_.abbRotation == "quaternion", raw, opt_.replyLabel);
       if (!p.valid || p.status != 0) {
         std::cerr << "vgr-sim-robot: " << opt_.name << ": setup request refused: " << raw << "\n";
         finish(1);
@@ -351,7 +390,7 @@ class SimRobot {
     ++replies_;
     Parsed p;
     if (failure.empty()) {
-      p = parseReply(dialect_, rawBytes, opt_.replyLabel);
+      p = parseReply(dialect_, opt_.abbRotation == "quaternion", rawBytes, opt_.replyLabel);
     } else {
       p.error = failure;
     }
@@ -375,6 +414,8 @@ class SimRobot {
         line["y_mm"] = p.yMm;
         line["z_mm"] = p.zMm;
         line["rz_deg"] = p.rzDeg;
+        line["ry_deg"] = p.ryDeg;
+        line["rx_deg"] = p.rxDeg;
         if (opt_.replyLabel) {
           line["label"] = p.label;
           line["confidence"] = p.confidence;
@@ -397,8 +438,8 @@ class SimRobot {
       }
       std::cout << line.dump(-1, ' ', false, Json::error_handler_t::replace) << std::endl;
     } else if (p.valid) {
-      std::cout << fmt::format("{} #{} valid status={} cycle={} x={:.3f} y={:.3f} z={:.3f} rz={:.3f} raw={}", opt_.name,
-                               replies_, p.status, p.cycle, p.xMm, p.yMm, p.zMm, p.rzDeg, raw)
+      std::cout << fmt::format("{} #{} valid status={} cycle={} x={:.3f} y={:.3f} z={:.3f} rz={:.3f} ry={:.3f} rx={:.3f} raw={}",
+                               opt_.name, replies_, p.status, p.cycle, p.xMm, p.yMm, p.zMm, p.rzDeg, p.ryDeg, p.rxDeg, raw)
                 << std::endl;
     } else {
       std::cout << opt_.name << " #" << replies_ << " INVALID (" << p.error
@@ -503,6 +544,10 @@ int main(int argc, char** argv) {
   app.add_option("--timeout-ms", opt.timeoutMs, "read timeout per reply")
       ->check(CLI::Range(1, 3600000));
   app.add_flag("--json", opt.json, "one JSON object per line");
+  app.add_option("--abb-rotation", opt.abbRotation, "abb: the reply's rotation, zyx (rz, ry, rx) or quaternion (q1..q4)")
+      ->check(CLI::IsMember({"zyx", "quaternion"}));
+  app.add_option("--snapshot", opt.snapshot,
+                 "eye-in-hand: send TRIG,<job>,<flange pose> instead of GET; the pose as x,y,z,qw,qx,qy,qz (mm, quaternion)");
   app.add_option("--program", opt.program, "play this robot program of examples/robot/ (fanuc: vgr_bg.kl and VGR_PICK.ls)");
   app.add_option("--config", opt.config, "with --program: the cell config the robot (--name) is in");
   app.add_flag("--reply-label", opt.replyLabel, "replies carry label and confidence (the endpoint's reply_label: true)");
@@ -520,8 +565,36 @@ int main(int argc, char** argv) {
   const std::optional<Dialect> dialect = vgr::protocol::parseDialect(opt.dialect);
   if (!dialect) return 2;  // unreachable: checked by CLI11
   if (opt.name.empty()) opt.name = opt.dialect;
+  std::optional<vgr::Pose> flange;
+  if (!opt.snapshot.empty()) {
+    std::vector<double> v;
+    std::string_view rest(opt.snapshot);
+    while (!rest.empty()) {
+      const std::size_t comma = rest.find(',');
+      const std::string_view f = rest.substr(0, comma);
+      double d = 0;
+      const auto res = std::from_chars(f.data(), f.data() + f.size(), d);
+      if (res.ec != std::errc{} || res.ptr != f.data() + f.size()) break;
+      v.push_back(d);
+      if (comma == std::string_view::npos) break;
+      rest.remove_prefix(comma + 1);
+    }
+    const double n = v.size() == 7 ? std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5] + v[6] * v[6]) : 0.0;
+    if (v.size() != 7 || std::abs(n - 1.0) > 1e-3) {
+      std::cerr << "vgr-sim-robot: --snapshot: expected x,y,z,qw,qx,qy,qz (mm, a unit quaternion), got '" << opt.snapshot
+                << "'\n";
+      return 2;
+    }
+    flange = vgr::poseFromQuaternion(v[0], v[1], v[2], v[3], v[4], v[5], v[6]);
+  }
   std::optional<vgr::sim::RobotProgram> program;
   if (!opt.program.empty()) {
+    // The example programs send their own requests (GET) and read Z-Y-X replies.
+    if (flange || opt.abbRotation != "zyx") {
+      std::cerr << "vgr-sim-robot: --program plays the example program's own GET and Z-Y-X replies: not with "
+                   "--snapshot or --abb-rotation quaternion\n";
+      return 2;
+    }
     if (opt.config.empty()) {
       std::cerr << "vgr-sim-robot: --program needs --config (the cell whose robot --name it plays)\n";
       return 2;
@@ -542,7 +615,7 @@ int main(int argc, char** argv) {
 
   try {
     asio::io_context io;
-    SimRobot robot(io, opt, *dialect, std::move(program));
+    SimRobot robot(io, opt, *dialect, flange, std::move(program));
     robot.start();
     io.run();
     return robot.exitCode();

@@ -128,7 +128,7 @@ Result<RobotProgram> loadRobotProgram(const std::vector<std::string>& files, con
     if (!ref) return std::unexpected(ref.error());
     prog.grip = compose(inverse(compose(inverse(wobj), *ref)), pick);
     prog.tcp = [wobj, pick](const std::array<double, 6>& v) {
-      const Pose d = poseFromZyxDeg(f32(v[0]), f32(v[1]), f32(v[2]), f32(v[3]), f32(v[4]), f32(v[5]));
+      const Pose d = poseFromEulerZyxDeg(f32(v[0]), f32(v[1]), f32(v[2]), EulerZyxDeg{f32(v[3]), f32(v[4]), f32(v[5])});
       return compose(compose(wobj, d), pick);
     };
     prog.summary = fmt::format("RAPID {}: JOB,{} then GET; PDispSet in {} at {}; pPick {}", files[0], prog.job, wobjName,
@@ -150,7 +150,7 @@ Result<RobotProgram> loadRobotProgram(const std::vector<std::string>& files, con
     prog.request = "GET," + std::to_string(prog.job) + "\r";  // WRITE sock('GET,', JOB_NO::1, CR)
     const std::regex p2(R"(P\[2:"pick"\]\{\s*GP1:\s*UF : 1, UT : 1,[^\n]*\n\s*X =\s*([-0-9.]+)\s*mm,\s*Y =\s*([-0-9.]+)\s*mm,\s*Z =\s*([-0-9.]+)\s*mm,\s*W =\s*([-0-9.]+)\s*deg,\s*P =\s*([-0-9.]+)\s*deg,\s*R =\s*([-0-9.]+)\s*deg)");
     if (!std::regex_search(ls, m, p2)) return fail(Status::BadArgument, files[1] + ": no P[2:\"pick\"] in UF 1 in /POS");
-    const Pose pick = poseFromZyxDeg(std::stod(m[1]), std::stod(m[2]), std::stod(m[3]), std::stod(m[6]), std::stod(m[5]), std::stod(m[4]));
+    const Pose pick = poseFromEulerZyxDeg(std::stod(m[1]), std::stod(m[2]), std::stod(m[3]), EulerZyxDeg{std::stod(m[6]), std::stod(m[5]), std::stod(m[4])});
     // UFRAME[1] is controller data: the cell config's frame is what was taught there.
     const Pose uf = ep->baseFromUser;
     auto ref = jobRef(prog.job);
@@ -158,7 +158,7 @@ Result<RobotProgram> loadRobotProgram(const std::vector<std::string>& files, con
     prog.grip = compose(inverse(compose(inverse(uf), *ref)), pick);
     prog.tcp = [uf, pick](const std::array<double, 6>& v) {
       // PR[10] = (x, y, z, w, p, r): R = Rz(r) Ry(p) Rx(w), applied as a frame in UFRAME 1.
-      const Pose d = poseFromZyxDeg(f32(v[0]), f32(v[1]), f32(v[2]), f32(v[5]), f32(v[4]), f32(v[3]));
+      const Pose d = poseFromEulerZyxDeg(f32(v[0]), f32(v[1]), f32(v[2]), EulerZyxDeg{f32(v[5]), f32(v[4]), f32(v[3])});
       return compose(compose(uf, d), pick);
     };
     prog.summary = fmt::format("KAREL {} + TP {}: GET,{}; Offset,PR[10] in UFRAME 1 = '{}' at {}; P[2] {}", files[0], files[1],

@@ -9,7 +9,9 @@
 //    CR LF, binary 40 bytes with its magic, UR one parenthesised tuple), and the same with
 //    reply_label and a raw label / confidence (ABB <= 80, UR 10 values, FANUC 85, binary 48);
 //  - StrictExchange with the paper's tokens fed the same stream: every event legal for its
-//    step, log details printable, back to Idle after Completed/Failed.
+//    step, log details printable, back to Idle after Completed/Failed; with byte 0's top bit
+//    set, in snapshot mode (eye-in-hand): every snapshot pose finite and a unit quaternion.
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
@@ -119,6 +121,42 @@ void fuzzStrict(std::string_view stream, std::size_t chunk) {
   check(ex.onClosed().kind == StrictExchange::EventKind::None);  // Idle: nothing to abort
 }
 
+// The eye-in-hand strict exchange: snapshots (token + pose frame) from the stream, answered
+// alternately with a part (the four steps) and with nothing to move.
+void fuzzStrictSnapshot(std::string_view stream, std::size_t chunk) {
+  StrictTokens tokens;
+  tokens.snapshot = "MoveJ_snapshot";
+  StrictExchange ex{tokens};
+  const std::string frame = "(0.100000,0.200000,0.300000,0.000000,0.000000,0.100000)";
+  int snapshots = 0;
+  for (std::size_t pos = 0; pos < stream.size(); pos += chunk) {
+    ex.feed(stream.substr(pos, chunk));
+    for (int guard = 0; guard < 10000; ++guard) {
+      const auto before = ex.step();
+      const auto ev = ex.poll();
+      if (ev.kind == StrictExchange::EventKind::None) break;
+      check(printableAscii(ev.detail));
+      if (ev.kind == StrictExchange::EventKind::Snapshot) {
+        check(before == StrictExchange::Step::Idle && ex.step() == StrictExchange::Step::AwaitResult);
+        const auto& p = ev.pose;
+        check(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z));
+        check(std::abs(p.qw * p.qw + p.qx * p.qx + p.qy * p.qy + p.qz * p.qz - 1.0) < 1e-9);
+        if (++snapshots % 2 == 0) {
+          check(ex.begin(frame) == "MoveJ_pose");
+        } else {
+          const std::string none = ex.noResult(vgr::Status::NoPartFound);
+          check(none == "MoveJ_none(1)" && ex.step() == StrictExchange::Step::Idle);
+        }
+      } else if (ev.kind == StrictExchange::EventKind::BadSnapshot) {
+        check(before == StrictExchange::Step::Idle && ex.step() == StrictExchange::Step::Idle);
+        check(ev.status == vgr::Status::BadArgument);
+      } else if (ev.kind == StrictExchange::EventKind::Unexpected) {
+        check(before == StrictExchange::Step::Idle || before == StrictExchange::Step::AwaitResult);
+      }
+    }
+  }
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -129,7 +167,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::string_view stream(reinterpret_cast<const char*>(data + 2), size - 2);
 
   if (dialect == Dialect::Strict) {
-    fuzzStrict(stream, chunk);
+    if (data[0] & 0x80)
+      fuzzStrictSnapshot(stream, chunk);
+    else
+      fuzzStrict(stream, chunk);
     return 0;
   }
   RequestDecoder decoder(dialect);

@@ -1,9 +1,9 @@
 // libFuzzer target: the robot side of the request dialects (protocol/robot_reply.hpp), the
-// strict reply checker vgr-sim-robot and `vgr soak` read every reply with. Two modes by
-// byte 0's top bit:
+// strict reply checker vgr-sim-robot and `vgr soak` read every reply with. Byte 0's bit 6
+// picks the label form (reply_label), bit 5 abb's quaternion form; two modes by its top bit:
 //   0: raw bytes as a reply of the dialect byte 0 picks (ur, abb, fanuc, binary): accepted
-//      replies have finite numbers and the dialect's size limits (byte 0's bit 6: the
-//      reply_label form, label and confidence in range);
+//      replies have finite numbers (six degrees of freedom), label and confidence in range
+//      and the dialect's size limits;
 //   1: a reply built from the input bytes (status, cycle, a pose of raw doubles: NaN, inf,
 //      huge) is formatted by vgrd's formatReply() and must be accepted by the checker with
 //      the same status and cycle, and its position within the dialect's rounding: every
@@ -46,20 +46,23 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   using namespace vgr::protocol;
   if (size == 0) return 0;
   const Dialect d = kDialects[data[0] % 4];
+  ReplyForm form;
+  form.withLabel = (data[0] & 0x40) != 0;
+  form.abbRotation = (data[0] & 0x20) != 0 ? AbbRotation::Quaternion : AbbRotation::EulerZyx;
   if ((data[0] & 0x80) == 0) {
     const std::string_view raw(reinterpret_cast<const char*>(data + 1), size - 1);
-    const bool withLabel = (data[0] & 0x40) != 0;  // the reply_label form
-    const auto r = parseRobotReply(d, raw, withLabel);
+    const auto r = parseRobotReply(d, raw, form);
     if (!r) {
       check(r.error().code == vgr::Status::BadArgument);
       return 0;
     }
-    check(std::isfinite(r->xMm) && std::isfinite(r->yMm) && std::isfinite(r->zMm) && std::isfinite(r->rzDeg));
-    check(r->cycle >= 0);
+    check(std::isfinite(r->xMm) && std::isfinite(r->yMm) && std::isfinite(r->zMm) && std::isfinite(r->rzDeg) &&
+          std::isfinite(r->ryDeg) && std::isfinite(r->rxDeg));
     check(r->label >= 0 && r->label <= kMaxReplyLabel && r->confidence >= 0 && r->confidence <= 1);
+    check(r->cycle >= 0);
     if (d == Dialect::Abb) check(raw.size() <= kAbbMaxReplyChars);
-    if (d == Dialect::Fanuc) check(raw.size() == (withLabel ? kFanucLabelReplyChars : kFanucReplyChars));
-    if (d == Dialect::Binary) check(raw.size() == (withLabel ? binary::kLabelReplyBytes : binary::kReplyBytes));
+    if (d == Dialect::Fanuc) check(raw.size() == (form.withLabel ? kFanucLabelReplyChars : kFanucReplyChars));
+    if (d == Dialect::Binary) check(raw.size() == (form.withLabel ? binary::kLabelReplyBytes : binary::kReplyBytes));
     return 0;
   }
   const std::uint8_t* p = data + 1;
@@ -74,8 +77,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const double x = take<double>(p, left), y = take<double>(p, left), z = take<double>(p, left);
   const double rz = take<double>(p, left);
   reply.pose = vgr::poseFromXyzRz(x, y, z, std::isfinite(rz) ? std::fmod(rz, 6.3) : rz);
-  const std::string wire = formatReply(d, reply);
-  const auto parsed = parseRobotReply(d, wire);
+  reply.label = take<std::uint16_t>(p, left) % (kMaxReplyLabel + 1);
+  reply.confidence = take<std::uint16_t>(p, left) % 1001 / 1000.0;
+  // config/ refuses abb_rotation quaternion together with reply_label (80 characters).
+  if (form.withLabel) form.abbRotation = AbbRotation::EulerZyx;
+  const std::string wire = formatReply(d, reply, form.withLabel, form.abbRotation);
+  const auto parsed = parseRobotReply(d, wire, form);
   check(parsed.has_value());
   check(parsed->cycle == static_cast<long long>(reply.cycleId));
   // formatReply turns an unsendable pose into INTERNAL with zeros, keeping the cycle.

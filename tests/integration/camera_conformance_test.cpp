@@ -1,7 +1,10 @@
 // The Camera conformance suite: every Camera implementation passes the same behavioural
 // tests against a real device. "aravis" is the real Aravis driver against the GigE camera
 // emulator (vgr-sim-camera, a separate process, over loopback GVCP/GVSP); "replay" is the
-// replay camera over a folder of PNG files. Adding a driver = adding a Device below.
+// replay camera over a folder of PNG files. "aravis_depth" is the same driver with
+// pixel_format Coord3D_C16 against the emulator as a depth camera (--depth: Coord3D_C16 over
+// real GVSP, the Scan3d features read from it), "replay_depth" the replay camera over the
+// same 3D data set. Adding a driver = adding a Device below.
 #include <signal.h>
 #include <unistd.h>
 
@@ -18,6 +21,7 @@
 #include "config/cell_config.hpp"
 #include "drivers/camera.hpp"
 #include "sim/scene.hpp"
+#include "tests/support/depth_dataset.hpp"
 #include "tests/support/processes.hpp"
 
 namespace {
@@ -44,6 +48,80 @@ class Device {
   virtual void takeAway() = 0;
   // The slowest a call may block on a vanished device (GVCP commands time out at ~2.5 s).
   virtual milliseconds worstBlock() const = 0;
+  // What its frames are.
+  virtual vgr::drivers::PixelType pixel() const { return vgr::drivers::PixelType::Mono8; }
+};
+
+// A 3D data set for the depth devices, once per process (removed at exit).
+const vgr::test::DepthTestSet& depthSet() {
+  struct Holder {
+    vgr::test::DepthTestSet set;
+    Holder() {
+      const auto dir = fs::temp_directory_path() / ("vgr-depth-conf-" + std::to_string(::getpid()));
+      fs::remove_all(dir);
+      set = vgr::test::writeDepthTestSet(dir.string(), 3);
+    }
+    ~Holder() {
+      std::error_code ec;
+      fs::remove_all(set.dir, ec);
+    }
+  };
+  static const Holder holder;
+  return holder.set;
+}
+
+class DepthEmulatorDevice final : public Device {
+ public:
+  vgr::config::CameraConfig config() override {
+    auto c = simCell().camera;
+    c.pixelFormat = "Coord3D_C16";
+    return c;
+  }
+  void bringUp() override {
+    proc_ = vgr::test::startEmulator({"--depth", depthSet().dir}, "", milliseconds(15000));
+    ASSERT_NE(proc_, nullptr) << "emulator did not start (port 3956 busy?)";
+  }
+  void takeAway() override {
+    if (proc_) proc_->kill9();
+    proc_.reset();
+  }
+  milliseconds worstBlock() const override { return milliseconds(3000); }
+  vgr::drivers::PixelType pixel() const override { return vgr::drivers::PixelType::DepthMm; }
+
+ private:
+  std::unique_ptr<ChildProcess> proc_;
+};
+
+class DepthFolderDevice final : public Device {
+ public:
+  DepthFolderDevice() {
+    // A copy of the set, so that taking it away does not disturb the other devices.
+    dir_ = fs::temp_directory_path() / ("vgr-replay-depth-conf-" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::copy(depthSet().dir, dir_, fs::copy_options::recursive);
+  }
+  ~DepthFolderDevice() override {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+    fs::remove_all(fs::path(dir_.string() + ".away"), ec);
+  }
+  vgr::config::CameraConfig config() override {
+    auto c = simCell().camera;
+    c.driver = "replay";
+    c.pixelFormat = "Coord3D_C16";
+    c.replayFolder = dir_.string();
+    c.replayLoop = true;
+    return c;
+  }
+  void bringUp() override {
+    if (fs::exists(dir_.string() + ".away")) fs::rename(dir_.string() + ".away", dir_);
+  }
+  void takeAway() override { fs::rename(dir_, dir_.string() + ".away"); }
+  milliseconds worstBlock() const override { return milliseconds(100); }
+  vgr::drivers::PixelType pixel() const override { return vgr::drivers::PixelType::DepthMm; }
+
+ private:
+  fs::path dir_;
 };
 
 class EmulatorDevice final : public Device {
@@ -103,6 +181,8 @@ class FolderDevice final : public Device {
 
 std::unique_ptr<Device> makeDevice(const std::string& name) {
   if (name == "aravis") return std::make_unique<EmulatorDevice>();
+  if (name == "aravis_depth") return std::make_unique<DepthEmulatorDevice>();
+  if (name == "replay_depth") return std::make_unique<DepthFolderDevice>();
   return std::make_unique<FolderDevice>();
 }
 
@@ -163,8 +243,12 @@ TEST_P(CameraConformance, EachTriggerGivesOneFreshFrame) {
     EXPECT_EQ(cam.lastFrameStatus(), FrameStatus::Ok);
     EXPECT_GT(frame.width, 0);
     EXPECT_GT(frame.height, 0);
-    EXPECT_EQ(frame.pixel, vgr::drivers::PixelType::Mono8);
-    EXPECT_EQ(frame.data.size(), static_cast<std::size_t>(frame.width) * frame.height);
+    EXPECT_EQ(frame.pixel, device_->pixel());
+    EXPECT_EQ(frame.data.size(), static_cast<std::size_t>(frame.width) * frame.height * frame.bytesPerPixel());
+    if (frame.depth()) {  // a depth frame carries its intrinsics
+      EXPECT_GT(frame.intrinsics.fx, 0);
+      EXPECT_GT(frame.intrinsics.fy, 0);
+    }
     EXPECT_GT(frame.frameId, lastId);
     lastId = frame.frameId;
     // The host timestamp is this trigger's: not before it (minus clock granularity).
@@ -255,7 +339,7 @@ TEST_P(CameraConformance, ReconnectsAfterTheDeviceDisappears) {
   EXPECT_TRUE(ok) << (ok ? "" : ok.error().message);
 }
 
-INSTANTIATE_TEST_SUITE_P(camera, CameraConformance, ::testing::Values("aravis", "replay"),
+INSTANTIATE_TEST_SUITE_P(camera, CameraConformance, ::testing::Values("aravis", "replay", "aravis_depth", "replay_depth"),
                          [](const auto& p) { return p.param; });
 
 }  // namespace

@@ -17,6 +17,8 @@
 #include <fstream>
 #include <functional>
 #include <memory>
+#include <mutex>
+#include <thread>
 #include <optional>
 #include <regex>
 #include <sstream>
@@ -143,10 +145,17 @@ class robot_languages : public ::testing::Test {
  protected:
   void SetUp() override {
     store_ = std::make_unique<daemon::ResultStore>(io_, std::set<int>{1});
-    for (Dialect d : {Dialect::Abb, Dialect::Fanuc, Dialect::Ur, Dialect::Strict}) {
+    // Eye-in-hand snapshots: record the flange pose, hand out cycle ids.
+    store_->setTrigger([this](int, const std::optional<Pose>& flange) {
+      std::lock_guard lock(flangeMutex_);
+      flanges_.push_back(flange);
+      return static_cast<std::uint32_t>(100 + flanges_.size());
+    });
+    for (Dialect d : {Dialect::Abb, Dialect::Fanuc, Dialect::Ur, Dialect::Strict, Dialect::Strict}) {
       RobotEndpoint ep;
-      ep.name = std::string(dialectName(d));
+      ep.name = std::string(dialectName(d)) + (servers_.size() == 4 ? "-snapshot" : "");
       ep.dialect = d;
+      if (servers_.size() == 4) ep.strict.snapshot = "MoveJ_snapshot";  // vgr_strict_snapshot.script
       store_->addRobot(ep.name, daemon::RobotPolicy{1, 1500, daemon::PartOrder::BestScore, 0});
       servers_.push_back(std::make_unique<RobotServer>(io_, ep, [this](const std::string& robot, const RobotRequest& req, ReplyFn reply) {
         store_->handle(robot, req, std::move(reply));
@@ -163,6 +172,25 @@ class robot_languages : public ::testing::Test {
   }
   void onIo(const std::function<void()>& f) { ioThread_.run(f); }
   std::uint16_t port(Dialect d) { return servers_[static_cast<std::size_t>(d == Dialect::Abb ? 0 : d == Dialect::Fanuc ? 1 : d == Dialect::Ur ? 2 : 3)]->port(); }
+  std::uint16_t snapshotStrictPort() { return servers_[4]->port(); }
+
+  // The flange pose of the next snapshot the store triggers (waits up to 3 s), and the
+  // cycle id it got.
+  std::optional<std::pair<std::uint32_t, Pose>> nextSnapshot() {
+    const auto deadline = Clock::now() + 3s;
+    while (Clock::now() < deadline) {
+      {
+        std::lock_guard lock(flangeMutex_);
+        if (flanges_.size() > seen_) {
+          ++seen_;
+          if (!flanges_[seen_ - 1]) return std::nullopt;
+          return std::make_pair(static_cast<std::uint32_t>(100 + seen_), *flanges_[seen_ - 1]);
+        }
+      }
+      std::this_thread::sleep_for(5ms);
+    }
+    return std::nullopt;
+  }
 
   // A pose at the edge of what the wire carries, with a tilt, and a large cycle id.
   void publish(std::uint32_t cycle, const Pose& p) {
@@ -180,7 +208,16 @@ class robot_languages : public ::testing::Test {
   asio::io_context& io_ = ioThread_.io();
   std::unique_ptr<daemon::ResultStore> store_;
   std::vector<std::unique_ptr<RobotServer>> servers_;
+  std::mutex flangeMutex_;
+  std::vector<std::optional<Pose>> flanges_;
+  std::size_t seen_ = 0;
 };
+
+// The angle between two rotations, degrees.
+double angleBetweenDeg(const Pose& a, const Pose& b) {
+  const double dot = std::abs(a.qw * b.qw + a.qx * b.qx + a.qy * b.qy + a.qz * b.qz);
+  return 2.0 * std::acos(std::min(1.0, dot)) * 180.0 / kPi;
+}
 
 // R = Rz(rz) Ry(ry) Rx(rx) as a unit quaternion (w, x, y, z), written out.
 Pose poseZyxDeg(double x, double y, double z, double rz, double ry, double rx) {
@@ -316,6 +353,110 @@ TEST_F(robot_languages, UrStrictScriptHandshake) {
   EXPECT_NEAR(v[2] * 1000, c.y, 1e-3);
   EXPECT_NEAR(v[3] * 1000, c.z, 1e-3);
   s.send("MoveJ_pose_done");
+}
+
+// ---- eye-in-hand snapshots (the flange pose goes with the request) --------------------------
+
+// The flange pose of the examples below, a tilted one.
+const Pose kFlange = poseZyxDeg(612.5, -40.25, 455.0, -120.0, -35.0, 170.0);
+
+TEST_F(robot_languages, UrSnapshotScriptSendsTheFlangePose) {
+  const std::string script = example("vgr_snapshot.script");
+  for (const char* needle : {"socket_send_string(\"TRIG,1,\"", "socket_send_string(get_actual_tool_flange_pose()",
+                             "socket_send_line(\"\"", "socket_read_ascii_float(8"})
+    ASSERT_NE(script.find(needle), std::string::npos) << needle;
+  Socket s(port(Dialect::Ur));
+  // What the three sends put on the wire: URScript prints a pose with 4 decimals.
+  s.send("TRIG,1,");
+  s.send("p[0.6125, -0.0402, 0.4550, 1.2002, -2.2178, 0.2064]");
+  s.send("\n");
+  const auto snap = nextSnapshot();
+  ASSERT_TRUE(snap);
+  EXPECT_NEAR(snap->second.x, kFlange.x, 0.06);
+  EXPECT_NEAR(snap->second.y, kFlange.y, 0.06);
+  EXPECT_NEAR(snap->second.z, kFlange.z, 0.06);
+  EXPECT_LT(angleBetweenDeg(snap->second, kFlange), 0.01);
+  const Pose part = poseZyxDeg(300.0, 20.0, 5.0, 45.0, 10.0, -5.0);
+  publish(snap->first, part);
+  const std::vector<double> r = urReadAsciiFloat(s, 8);
+  ASSERT_EQ(r[0], 8);
+  EXPECT_EQ(r[1], 0);
+  EXPECT_EQ(r[2], snap->first);
+  EXPECT_NEAR(r[3] * 1000, part.x, 1e-3);
+}
+
+TEST_F(robot_languages, RapidSnapshotSendsValToStrOfThePose) {
+  const std::string mod = example("VgrSnapshot.mod");
+  for (const char* needle : {"SocketSend sock \\Str:=\"TRIG,1,\";", "SocketSend sock \\Str:=ValToStr(flange);",
+                             "SocketSend sock \\Str:=\"#\";", "CRobT(\\Tool:=tool0 \\WObj:=wobj0)"})
+    ASSERT_NE(mod.find(needle), std::string::npos) << needle;
+  Socket s(port(Dialect::Abb));
+  // ValToStr of a pose: 6 significant digits per num, as RAPID writes them.
+  s.send("TRIG,1,");
+  s.send("[[612.5,-40.25,455],[0.300989,0.452347,-0.835904,0.0777951]]");
+  s.send("#");
+  const auto snap = nextSnapshot();
+  ASSERT_TRUE(snap);
+  EXPECT_NEAR(snap->second.x, kFlange.x, 1e-3);
+  EXPECT_NEAR(snap->second.z, kFlange.z, 1e-3);
+  EXPECT_LT(angleBetweenDeg(snap->second, kFlange), 1e-3);
+  publish(snap->first, poseZyxDeg(300.0, 20.0, 5.0, 45.0, 10.0, -5.0));
+  const auto vals = rapidParseReply(s.recvOnce(80));
+  ASSERT_TRUE(vals);
+  EXPECT_EQ((*vals)[0], 0.0f);
+  EXPECT_EQ((*vals)[1], static_cast<float>(snap->first));
+  EXPECT_NEAR((*vals)[5], 45.0, 1e-3);
+  EXPECT_NEAR((*vals)[6], 10.0, 1e-3);
+  EXPECT_NEAR((*vals)[7], -5.0, 1e-3);
+}
+
+TEST_F(robot_languages, KarelSnapshotWritesTheFlangeWpr) {
+  const std::string kl = example("vgr_snap.kl");
+  ASSERT_NE(kl.find("WRITE sock('TRIG,', JOB_NO::1, ',', here.x::10::3"), std::string::npos);
+  ASSERT_NE(kl.find("here.w::10::3, ',', here.p::10::3, ',', here.r::10::3, CR)"), std::string::npos);
+  Socket s(port(Dialect::Fanuc));
+  // WRITE x::10::3: right-aligned in 10 characters, 3 decimals (W = rx, P = ry, R = rz).
+  s.send("TRIG,1,   612.500,   -40.250,   455.000,   170.000,   -35.000,  -120.000\r");
+  const auto snap = nextSnapshot();
+  ASSERT_TRUE(snap);
+  EXPECT_NEAR(snap->second.y, kFlange.y, 1e-6);
+  EXPECT_LT(angleBetweenDeg(snap->second, kFlange), 1e-4);
+  publish(snap->first, poseZyxDeg(300.0, 20.0, 5.0, 45.0, 10.0, -5.0));
+  const auto line = karelReadLine(s);
+  ASSERT_TRUE(line);
+  EXPECT_EQ(karelCnvStrInt(karelSubStr(*line, 1, 5)), 0);
+  EXPECT_EQ(karelCnvStrReal(karelSubStr(*line, 48, 8)), -5.0f);  // W
+}
+
+TEST_F(robot_languages, UrStrictSnapshotScriptHandshake) {
+  const std::string script = example("vgr_strict_snapshot.script");
+  for (const char* needle : {"socket_send_string(\"MoveJ_snapshot\"", "socket_send_string(get_actual_tool_flange_pose()",
+                             "cmd == \"MoveJ_pose\"", "socket_send_string(\"MoveJ_pose_done\""})
+    ASSERT_NE(script.find(needle), std::string::npos) << needle;
+  Socket s(snapshotStrictPort());
+  EXPECT_TRUE(s.quiet(200ms));  // snapshot mode: vgrd waits for the robot
+  s.send("MoveJ_snapshot");
+  s.send("p[0.6125, -0.0402, 0.4550, 1.2002, -2.2178, 0.2064]");
+  auto snap = nextSnapshot();
+  ASSERT_TRUE(snap);
+  EXPECT_LT(angleBetweenDeg(snap->second, kFlange), 0.01);
+  publish(snap->first, poseZyxDeg(300.0, 20.0, 5.0, 45.0, 10.0, -5.0));
+  EXPECT_EQ(s.recvOnce(64), "MoveJ_pose");
+  s.send("MoveJ_pose_wait_pos");
+  const std::vector<double> v = urReadAsciiFloat(s, 6);
+  ASSERT_EQ(v[0], 6);
+  EXPECT_NEAR(v[1] * 1000, 300.0, 1e-3);
+  s.send("MoveJ_pose_done");
+  // The next view has no part: "MoveJ_none(1)".
+  s.send("MoveJ_snapshot(0.612500,-0.040250,0.455000,1.200152,-2.217794,0.206403)");
+  snap = nextSnapshot();
+  ASSERT_TRUE(snap);
+  CycleResult empty;
+  empty.cycleId = snap->first;
+  empty.jobId = 1;
+  empty.status = Status::NoPartFound;
+  onIo([&] { store_->onResult(empty); });
+  EXPECT_EQ(s.recvOnce(64), "MoveJ_none(1)");
 }
 
 }  // namespace

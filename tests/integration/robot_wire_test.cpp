@@ -329,7 +329,7 @@ TEST_F(robot_strict_wire, DisconnectMidExchange) {
 
 TEST_F(robot_strict_wire, ConfiguredTokensAndLineEnd) {
   RobotEndpoint ep = endpoint("ur5-pick", Dialect::Strict);
-  ep.strict = StrictTokens{"Pick_pose", "Pick_ready", "Pick_done", "\n"};
+  ep.strict = StrictTokens{"Pick_pose", "Pick_ready", "Pick_done", "\n", "", "MoveJ_none"};
   ep.stepTimeoutMs = 500;
   const std::uint16_t port = serve(ep, RobotPolicy{1, 200, PartOrder::BestScore, 0});
   RawClient robot(port);

@@ -35,7 +35,7 @@ sim::DepthCameraModel smallCamera() {
   return c;
 }
 
-DepthIntrinsics intrinsicsOf(const sim::DepthCameraModel& c) { return {c.width, c.height, c.fx, c.fy, c.cx, c.cy}; }
+DepthIntrinsics intrinsicsOf(const sim::DepthCameraModel& c) { return {c.fx, c.fy, c.cx, c.cy, c.width, c.height}; }
 
 vision::PlyCloud modelOf(const std::string& part) {
   auto p = sim::depthPart(part);

@@ -81,7 +81,7 @@ TEST(cycle_result_path, robots_are_served_by_label) {
   store.onResult(r);
   auto ask = [&](const std::string& robot) {
     std::optional<protocol::RobotReply> got;
-    store.handle(robot, protocol::RobotRequest{protocol::Command::Get, 1, false},
+    store.handle(robot, protocol::RobotRequest{protocol::Command::Get, 1, false, std::nullopt},
                  [&](const protocol::RobotReply& reply) { got = reply; });
     for (int i = 0; i < 100 && !got; ++i) {
       io.restart();

@@ -11,7 +11,7 @@ namespace {
 
 TEST(pose_limits, EmptyLimitsAcceptEverything) {
   EXPECT_TRUE(JobLimits{}.empty());
-  EXPECT_EQ(limitViolation(JobLimits{}, poseFromZyxDeg(1e5, -1e5, 3, 170, 80, -170), Pose{}), "");
+  EXPECT_EQ(limitViolation(JobLimits{}, poseFromEulerZyxDeg(1e5, -1e5, 3, EulerZyxDeg{170, 80, -170}), Pose{}), "");
 }
 
 TEST(pose_limits, EachAxisIsChecked) {
@@ -20,14 +20,14 @@ TEST(pose_limits, EachAxisIsChecked) {
   l.offset.rz = Interval{-30, 30};
   l.workArea.y = Interval{-100, 100};
   l.workArea.ry = Interval{-1, 1};
-  const Pose ok = poseFromZyxDeg(400, 20, 0, 10, 0, 0);
-  EXPECT_EQ(limitViolation(l, ok, poseFromZyxDeg(49.9, 0, 0, 29.9, 0, 0)), "");
-  EXPECT_EQ(limitViolation(l, ok, poseFromZyxDeg(62.1, 0, 0, 0, 0, 0)), "offset x 62.100 mm outside [-50, 50]");
-  EXPECT_EQ(limitViolation(l, ok, poseFromZyxDeg(0, 0, 0, -45, 0, 0)), "offset rz -45.000 deg outside [-30, 30]");
-  EXPECT_EQ(limitViolation(l, poseFromZyxDeg(400, 120, 0, 0, 0, 0), Pose{}), "work area y 120.000 mm outside [-100, 100]");
-  EXPECT_EQ(limitViolation(l, poseFromZyxDeg(400, 0, 0, 0, 2.5, 0), Pose{}), "work area ry 2.500 deg outside [-1, 1]");
+  const Pose ok = poseFromEulerZyxDeg(400, 20, 0, EulerZyxDeg{10, 0, 0});
+  EXPECT_EQ(limitViolation(l, ok, poseFromEulerZyxDeg(49.9, 0, 0, EulerZyxDeg{29.9, 0, 0})), "");
+  EXPECT_EQ(limitViolation(l, ok, poseFromEulerZyxDeg(62.1, 0, 0, EulerZyxDeg{0, 0, 0})), "offset x 62.100 mm outside [-50, 50]");
+  EXPECT_EQ(limitViolation(l, ok, poseFromEulerZyxDeg(0, 0, 0, EulerZyxDeg{-45, 0, 0})), "offset rz -45.000 deg outside [-30, 30]");
+  EXPECT_EQ(limitViolation(l, poseFromEulerZyxDeg(400, 120, 0, EulerZyxDeg{0, 0, 0}), Pose{}), "work area y 120.000 mm outside [-100, 100]");
+  EXPECT_EQ(limitViolation(l, poseFromEulerZyxDeg(400, 0, 0, EulerZyxDeg{0, 2.5, 0}), Pose{}), "work area ry 2.500 deg outside [-1, 1]");
   // Both bounds are inside.
-  EXPECT_EQ(limitViolation(l, ok, poseFromZyxDeg(-50, 0, 0, 30, 0, 0)), "");
+  EXPECT_EQ(limitViolation(l, ok, poseFromEulerZyxDeg(-50, 0, 0, EulerZyxDeg{30, 0, 0})), "");
 }
 
 TEST(pose_limits, NanIsOutside) {

@@ -84,6 +84,9 @@ TEST(robot_config, ErrorsNameFileLineAndKey) {
        "cell.yaml:5: key 'robots[0].reply_label': expected true or false, got 'yes please'"},
       {"  - {name: a, port: 1, dialect: strict, reply_label: true}\n",
        "cell.yaml:5: key 'robots[0].reply_label': the strict dialect's pose frame has no room for a label (paper 002's six values)"},
+      {"  - {name: a, port: 1, dialect: abb, abb_rotation: quaternion, reply_label: true}\n",
+       "cell.yaml:5: key 'robots[0].reply_label': abb_rotation quaternion leaves no room for the label within RAPID's 80 "
+       "characters; use abb_rotation zyx"},
       {"  - {name: a, port: 1, part_order: label_only}\n",
        "cell.yaml:5: key 'robots[0].label': part_order label_only needs a label"},
       {"  - {name: a, port: 1, strict: {command: X}}\n", "cell.yaml:5: key 'robots[0].strict': only for dialect strict"},

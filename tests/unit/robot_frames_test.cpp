@@ -56,9 +56,9 @@ void expectSame(const Mat& a, const Mat& b, const char* what) {
 const Mat kU = zyx(400, -200, 0, 90, 0, 0);
 const Mat kR = zyx(400, 0, 0, 0, 0, 0);
 const Mat kP = zyx(437.25, 18.5, 2.0, 31.0, 0.4, -0.3);
-const Pose U = poseFromZyxDeg(400, -200, 0, 90, 0, 0);
-const Pose R = poseFromZyxDeg(400, 0, 0, 0, 0, 0);
-const Pose P = poseFromZyxDeg(437.25, 18.5, 2.0, 31.0, 0.4, -0.3);
+const Pose U = poseFromEulerZyxDeg(400, -200, 0, EulerZyxDeg{90, 0, 0});
+const Pose R = poseFromEulerZyxDeg(400, 0, 0, EulerZyxDeg{0, 0, 0});
+const Pose P = poseFromEulerZyxDeg(437.25, 18.5, 2.0, EulerZyxDeg{31.0, 0.4, -0.3});
 
 TEST(robot_frames, PoseInTheBaseFrameIsThePartItself) {
   for (Dialect d : {Dialect::Ur, Dialect::Abb, Dialect::Fanuc, Dialect::Binary, Dialect::Strict})
@@ -115,19 +115,19 @@ TEST(robot_frames, RepliesCarryTheOffsetInEachDialect) {
   r.cycleId = 4711;
   r.jobId = 1;
   r.status = Status::Ok;
-  r.reference = poseFromZyxDeg(400, 0, 0, 0, 0, 0);
+  r.reference = poseFromEulerZyxDeg(400, 0, 0, EulerZyxDeg{0, 0, 0});
   PartResult part;
-  part.pose = poseFromZyxDeg(420, 10, 0, 30, 0, 0);
+  part.pose = poseFromEulerZyxDeg(420, 10, 0, EulerZyxDeg{30, 0, 0});
   r.parts.push_back(part);
   auto reply = [&](Dialect d) {
-    const daemon::RobotDelivery delivery{d, RobotFrame{Delivery::Offset, poseFromZyxDeg(400, -200, 0, 90, 0, 0)}};
+    const daemon::RobotDelivery delivery{d, RobotFrame{Delivery::Offset, poseFromEulerZyxDeg(400, -200, 0, EulerZyxDeg{90, 0, 0})}};
     return formatReply(d, daemon::ResultStore::replies(r, daemon::RobotPolicy{}, delivery).front());
   };
   EXPECT_EQ(reply(Dialect::Abb), "0,4711,36.795,-120.000,0.000,30.000,0.000,0.000");
   EXPECT_EQ(reply(Dialect::Fanuc), "+0000,0004711,+00036.795,-00120.000,+00000.000,+000.000,+000.000,+030.000\r\n");
   EXPECT_EQ(reply(Dialect::Ur), "(0,4711,0.020000,0.010000,0.000000,0.000000,0.000000,0.523599)");
   // Pose mode in the same frame: U^-1 P.
-  const daemon::RobotDelivery pose{Dialect::Abb, RobotFrame{Delivery::Pose, poseFromZyxDeg(400, -200, 0, 90, 0, 0)}};
+  const daemon::RobotDelivery pose{Dialect::Abb, RobotFrame{Delivery::Pose, poseFromEulerZyxDeg(400, -200, 0, EulerZyxDeg{90, 0, 0})}};
   EXPECT_EQ(formatReply(Dialect::Abb, daemon::ResultStore::replies(r, daemon::RobotPolicy{}, pose).front()),
             "0,4711,210.000,-20.000,0.000,-60.000,0.000,0.000");
   // An out-of-limits cycle: -9 and no pose, for every dialect.

@@ -30,18 +30,18 @@ TEST(robot_reply, LabelledRepliesRoundTrip) {
   r.confidence = 0.875;
   for (const Dialect d : {Dialect::Ur, Dialect::Abb, Dialect::Fanuc, Dialect::Binary}) {
     const std::string raw = formatReply(d, r, true);
-    const auto p = parseRobotReply(d, raw, true);
+    const auto p = parseRobotReply(d, raw, ReplyForm{.withLabel = true});
     ASSERT_TRUE(p.has_value()) << dialectName(d) << ": " << p.error().message << " " << raw;
     EXPECT_EQ(p->cycle, 4711);
     EXPECT_NEAR(p->xMm, 512.3, 0.0011) << dialectName(d);
     EXPECT_NEAR(p->rzDeg, -12.5, 0.0011) << dialectName(d);
     EXPECT_EQ(p->label, 17) << dialectName(d);
     EXPECT_DOUBLE_EQ(p->confidence, 0.875) << dialectName(d);
-    EXPECT_FALSE(parseRobotReply(d, raw, false)) << dialectName(d);
-    EXPECT_FALSE(parseRobotReply(d, formatReply(d, r, false), true)) << dialectName(d);
+    EXPECT_FALSE(parseRobotReply(d, raw, ReplyForm{.withLabel = false})) << dialectName(d);
+    EXPECT_FALSE(parseRobotReply(d, formatReply(d, r, false), ReplyForm{.withLabel = true})) << dialectName(d);
   }
-  EXPECT_FALSE(parseRobotReply(Dialect::Abb, "0,4711,512.300,-120.050,35.000,-12.500,0.000,0.000,17,1.500", true));
-  EXPECT_TRUE(parseRobotReply(Dialect::Abb, "0,4711,512.300,-120.050,35.000,-12.500,0.000,0.000,17,1.000", true));
+  EXPECT_FALSE(parseRobotReply(Dialect::Abb, "0,4711,512.300,-120.050,35.000,-12.500,0.000,0.000,17,1.500", ReplyForm{.withLabel = true}));
+  EXPECT_TRUE(parseRobotReply(Dialect::Abb, "0,4711,512.300,-120.050,35.000,-12.500,0.000,0.000,17,1.000", ReplyForm{.withLabel = true}));
 }
 
 TEST(robot_reply, EveryDialectRoundTrips) {
@@ -55,6 +55,32 @@ TEST(robot_reply, EveryDialectRoundTrips) {
     EXPECT_NEAR(p->zMm, 35.0, 0.0011) << dialectName(d);
     EXPECT_NEAR(p->rzDeg, -12.5, 0.0011) << dialectName(d);
   }
+}
+
+// Six degrees of freedom, the abb quaternion form and the label fields (issue 14; the
+// reply forms vgr-sim-robot checks): every dialect gives back the pose's Z-Y-X angles.
+TEST(robot_reply, SixDofQuaternionAndLabelRoundTrip) {
+  RobotReply r = okReply();
+  r.pose = poseFromEulerZyxDeg(512.3, -120.05, 35.0, EulerZyxDeg{-12.5, 20.25, -33.75});
+  r.label = 7;
+  r.confidence = 0.875;
+  for (const Dialect d : {Dialect::Ur, Dialect::Abb, Dialect::Fanuc, Dialect::Binary})
+    for (const bool withLabel : {false, true})
+      for (const AbbRotation rot : {AbbRotation::EulerZyx, AbbRotation::Quaternion}) {
+        if (d != Dialect::Abb && rot == AbbRotation::Quaternion) continue;
+        const std::string what = std::string(dialectName(d)) + (withLabel ? " label" : "") +
+                                 (rot == AbbRotation::Quaternion ? " quaternion" : "");
+        const auto p = parseRobotReply(d, formatReply(d, r, withLabel, rot), ReplyForm{rot, withLabel});
+        ASSERT_TRUE(p.has_value()) << what << ": " << p.error().message;
+        EXPECT_NEAR(p->xMm, 512.3, 0.0011) << what;
+        EXPECT_NEAR(p->rzDeg, -12.5, 0.003) << what;
+        EXPECT_NEAR(p->ryDeg, 20.25, 0.003) << what;
+        EXPECT_NEAR(p->rxDeg, -33.75, 0.003) << what;
+        EXPECT_EQ(p->label, withLabel ? 7 : 0) << what;
+        EXPECT_NEAR(p->confidence, withLabel ? 0.875 : 0.0, 1e-9) << what;
+        // The other form is refused: a robot program reads exactly one.
+        EXPECT_FALSE(parseRobotReply(d, formatReply(d, r, withLabel, rot), ReplyForm{rot, !withLabel})) << what;
+      }
 }
 
 TEST(robot_reply, ByteErrorsAreRefused) {

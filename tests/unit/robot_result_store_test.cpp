@@ -37,7 +37,7 @@ CycleResult result(std::uint32_t id, int job, std::vector<PartResult> parts, Sta
   return r;
 }
 
-RobotRequest get(int job = 0, bool last = false) { return RobotRequest{Command::Get, job, last}; }
+RobotRequest get(int job = 0, bool last = false) { return RobotRequest{Command::Get, job, last, std::nullopt}; }
 
 class robot_result_store : public ::testing::Test {
  protected:
@@ -147,13 +147,13 @@ TEST_F(robot_result_store, LastRepeatsWhatTheRobotGotLast) {
 TEST_F(robot_result_store, JobSwitching) {
   EXPECT_EQ(store_.currentJob("ur"), 1);
   store_.onResult(result(31, 2, {part(7, 0.9, 0)}));
-  auto sw = ask("ur", RobotRequest{Command::Job, 2, false});
+  auto sw = ask("ur", RobotRequest{Command::Job, 2, false, std::nullopt});
   ASSERT_TRUE(sw);
   EXPECT_EQ(sw->status, Status::Ok);
   EXPECT_EQ(sw->cycleId, 0u);
   EXPECT_EQ(store_.currentJob("ur"), 2);
   EXPECT_DOUBLE_EQ(ask("ur", get())->pose.x, 7);  // GET = job 2 now
-  EXPECT_EQ(ask("ur", RobotRequest{Command::Job, 9, false})->status, Status::JobNotFound);
+  EXPECT_EQ(ask("ur", RobotRequest{Command::Job, 9, false, std::nullopt})->status, Status::JobNotFound);
   EXPECT_EQ(store_.currentJob("ur"), 2);
   EXPECT_EQ(ask("ur", get(9))->status, Status::JobNotFound);
   EXPECT_EQ(store_.currentJob("abb"), 1);  // per robot

@@ -48,7 +48,7 @@ TEST(robot_strict, TokensSplitAcrossReadsAndWithLineEnds) {
 }
 
 TEST(robot_strict, ConfigurableTokens) {
-  StrictExchange x{StrictTokens{"PICK", "PICK_READY", "PICK_OK", "\r\n"}};
+  StrictExchange x{StrictTokens{"PICK", "PICK_READY", "PICK_OK", "\r\n", "", "MoveJ_none"}};
   EXPECT_EQ(x.begin("(1,2,3,4,5,6)"), "PICK\r\n");
   x.feed("MoveJ_pose_wait_pos\n");  // the default token is wrong here
   auto e = x.poll();

@@ -78,12 +78,12 @@ class robot_trigger_store : public ::testing::Test {
 
 TEST_F(robot_trigger_store, answers_with_the_triggered_cycle) {
   std::vector<int> triggered;
-  store_.setTrigger([&](int job) {
+  store_.setTrigger([&](int job, const std::optional<Pose>&) {
     triggered.push_back(job);
     return 42u;
   });
   std::optional<RobotReply> got;
-  store_.handle("ur", RobotRequest{Command::Trigger, 0, false}, [&](const RobotReply& r) { got = r; });
+  store_.handle("ur", RobotRequest{Command::Trigger, 0, false, std::nullopt}, [&](const RobotReply& r) { got = r; });
   ASSERT_EQ(triggered, std::vector<int>{1});  // the robot's current job
   store_.onResult(result(41, 1, 10));         // an older cycle of the same job: not this one
   run(got, 20ms);
@@ -97,19 +97,19 @@ TEST_F(robot_trigger_store, answers_with_the_triggered_cycle) {
 
 TEST_F(robot_trigger_store, refused_late_and_unavailable) {
   std::optional<RobotReply> got;
-  store_.handle("ur", RobotRequest{Command::Trigger, 2, false}, [&](const RobotReply& r) { got = r; });
+  store_.handle("ur", RobotRequest{Command::Trigger, 2, false, std::nullopt}, [&](const RobotReply& r) { got = r; });
   ASSERT_TRUE(got);
   EXPECT_EQ(got->status, Status::UnknownCommand);
 
-  store_.setTrigger([](int) { return 0u; });
+  store_.setTrigger([](int, const std::optional<Pose>&) { return 0u; });
   got.reset();
-  store_.handle("ur", RobotRequest{Command::Trigger, 2, false}, [&](const RobotReply& r) { got = r; });
+  store_.handle("ur", RobotRequest{Command::Trigger, 2, false, std::nullopt}, [&](const RobotReply& r) { got = r; });
   ASSERT_TRUE(got);
   EXPECT_EQ(got->status, Status::BusyOverrun);
 
-  store_.setTrigger([](int) { return 7u; });
+  store_.setTrigger([](int, const std::optional<Pose>&) { return 7u; });
   got.reset();
-  store_.handle("ur", RobotRequest{Command::Trigger, 2, false}, [&](const RobotReply& r) { got = r; });
+  store_.handle("ur", RobotRequest{Command::Trigger, 2, false, std::nullopt}, [&](const RobotReply& r) { got = r; });
   ASSERT_TRUE(run(got, 1000ms));
   EXPECT_EQ(got->status, Status::ResultNotReady);
 }

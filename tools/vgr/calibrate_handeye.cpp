@@ -24,7 +24,9 @@ namespace se3 = vision::se3;
 namespace fs = std::filesystem;
 
 int runCalibrateHandEye(const CalibHandEyeOptions& o) {
+  if (o.cloud) return runCalibrateHandEyeCloud(o);
   if (auto w = checkOutputPath(o.out); !w) return bad(w.error().message);
+  if (o.intrinsics.empty()) return bad("--intrinsics: the camera's intrinsics.yaml is needed (or --cloud for a depth camera)");
   auto spec = patternSpec(o.pattern);
   if (!spec) return bad(spec.error().message);
   auto cam = calib::readIntrinsics(o.intrinsics);
@@ -149,9 +151,12 @@ int runCalibrateHandEye(const CalibHandEyeOptions& o) {
 
 CLI::App* CalibrateHandEyeCommand::add(CLI::App& parent) {
   auto& calHe = options_;
-  auto* calHeCmd = parent.add_subcommand("handeye", "hand-eye from a folder of plate images + poses.txt");
+  auto* calHeCmd = parent.add_subcommand("handeye", "hand-eye from a folder of plate images (or depth images, --cloud) + poses.txt");
   calHeCmd->add_option("--folder", calHe.folder, "folder with poses.txt and the images it names")->required();
-  calHeCmd->add_option("--intrinsics", calHe.intrinsics, "intrinsics.yaml from 'vgr calibrate intrinsics'")->required();
+  calHeCmd->add_option("--intrinsics", calHe.intrinsics, "intrinsics.yaml from 'vgr calibrate intrinsics' (2D camera)");
+  calHeCmd->add_flag("--cloud", calHe.cloud, "a depth camera: depth images of a sphere target (paper 003's point-cloud registration)");
+  calHeCmd->add_option("--target", calHe.target, "--cloud: the sphere target, target.yaml (default FOLDER/target.yaml)");
+  calHeCmd->add_option("--camera", calHe.camera, "--cloud: camera.yaml of the depth images (default FOLDER/camera.yaml)");
   calHeCmd->add_option("--configuration", calHe.configuration, "eye-in-hand, eye-to-hand or auto");
   addPatternOptions(*calHeCmd, calHe.pattern);
   calHeCmd->add_option("--out", calHe.out, "handeye.yaml to write");

@@ -1,5 +1,7 @@
 // `vgr calibrate handeye`: hand-eye from a folder of plate images + the robot poses in
-// poses.txt (docs/calibration.md).
+// poses.txt (docs/calibration.md). With --cloud: from depth images of a sphere target
+// (camera.yaml of the 3D data-set format, target.yaml, poses.txt; paper 003's point-cloud
+// registration, vision/calib/handeye_cloud.hpp).
 // Returns the process exit code: 0 ok, 2 bad input (message on stderr naming file / view / key).
 #pragma once
 
@@ -12,7 +14,10 @@ namespace vgr::tools {
 
 struct CalibHandEyeOptions {
   std::string folder;          // holds poses.txt and the images it names
-  std::string intrinsics;      // intrinsics.yaml
+  std::string intrinsics;      // intrinsics.yaml (2D camera; not with --cloud)
+  bool cloud = false;          // a depth camera: depth images of a sphere target
+  std::string target;          // --cloud: target.yaml (default FOLDER/target.yaml)
+  std::string camera;          // --cloud: camera.yaml of the depth images (default FOLDER/camera.yaml)
   std::string configuration = "auto";  // eye-in-hand | eye-to-hand | auto
   CalibPatternOptions pattern;
   std::string out = "handeye.yaml";
@@ -21,6 +26,7 @@ struct CalibHandEyeOptions {
 };
 
 int runCalibrateHandEye(const CalibHandEyeOptions& o);
+int runCalibrateHandEyeCloud(const CalibHandEyeOptions& o);  // calibrate_handeye_cloud.cpp
 
 class CalibrateHandEyeCommand final : public OptionsSubcommand<CalibHandEyeOptions, runCalibrateHandEye> {
  public:

@@ -11,7 +11,9 @@
 
 #include "config/cell_config.hpp"
 #include "core/pose.hpp"
+#include "config/depth_dataset.hpp"
 #include "sim/calib_scene.hpp"
+#include "sim/depth_calib_scene.hpp"
 #include "vision/calib/handeye.hpp"
 #include "vision/calib/intrinsics.hpp"
 #include "vision/calib/robot_pose_file.hpp"
@@ -101,6 +103,47 @@ int synthCell(const CalibSynthOptions& o, const calib::PatternSpec& spec) {
   return 0;
 }
 
+// --kind handeye-cloud: a depth camera and the sphere target (docs/calibration.md, "Depth
+// cameras"): camera.yaml (3D data-set format), target.yaml, images/pose_NNN.png (16-bit z),
+// poses.txt naming them, truth.yaml.
+int synthHandEyeCloud(const CalibSynthOptions& o, calib::HandEyeConfig cfg) {
+  const sim::DepthCamera cam = sim::defaultDepthCamera();
+  const auto target = sim::defaultSphereTarget();
+  const auto footprint = sim::sphereTargetFootprint();
+  sim::TrueCamera plateCam;  // the depth camera as the view generator wants it (no distortion)
+  plateCam.cameraMatrix = cv::Matx33d(cam.intrinsics.fx, 0, cam.intrinsics.cx, 0, cam.intrinsics.fy, cam.intrinsics.cy, 0, 0, 1);
+  plateCam.dist = cv::Vec<double, 5>(0, 0, 0, 0, 0);
+  plateCam.imageSize = cv::Size(cam.width, cam.height);
+  const fs::path dir(o.out);
+  fs::create_directories(dir / "images");
+  config::DepthCameraFile camFile;
+  camFile.width = cam.width;
+  camFile.height = cam.height;
+  camFile.setIntrinsics(cam.intrinsics);
+  camFile.depthScaleMm = cam.depthScaleMm;
+  if (auto w = config::writeDepthCameraFile((dir / "camera.yaml").string(), camFile); !w) return bad(w.error().message);
+  if (auto w = calib::writeSphereTarget((dir / "target.yaml").string(), target); !w) return bad(w.error().message);
+  const auto s = sim::makeHandEyeScenario(cfg, plateCam, footprint, o.views, o.seed, o.robotNoiseMm, o.robotNoiseDeg,
+                                          std::nullopt, o.distanceMm);
+  std::vector<calib::PoseEntry> poses;
+  for (std::size_t i = 0; i < s.camFromPlate.size(); ++i) {
+    sim::DepthRenderOptions ro;
+    ro.noiseSigmaMm = o.depthNoiseMm;
+    ro.seed = o.seed * 1000 + i;
+    const std::string name = fmt::format("images/pose_{:03d}.png", i);
+    const cv::Mat depth = sim::renderSphereTargetDepth(cam, target, footprint, s.camFromPlate[i], ro);
+    if (!cv::imwrite((dir / name).string(), sim::quantiseDepth(depth, cam.depthScaleMm)))
+      return bad(fmt::format("{}: cannot write", (dir / name).string()));
+    poses.push_back({name, s.robotReported[i], 0});
+    progress(i + 1, s.camFromPlate.size(), name, "rendered");
+  }
+  if (auto w = calib::writePoseFile((dir / "poses.txt").string(), o.poseFormat, poses); !w) return bad(w.error().message);
+  if (auto w = calib::writeHandEyeTruth((dir / "truth.yaml").string(), s.config, s.x, s.y); !w) return bad(w.error().message);
+  std::printf("%zu depth images (%.2f mm noise), poses.txt (%s), camera.yaml, target.yaml and truth.yaml in %s\n",
+              s.camFromPlate.size(), o.depthNoiseMm, o.poseFormat.c_str(), o.out.c_str());
+  return 0;
+}
+
 }  // namespace
 
 int runCalibrateSynth(const CalibSynthOptions& o) {
@@ -113,6 +156,11 @@ int runCalibrateSynth(const CalibSynthOptions& o) {
   fs::create_directories(o.out, ec);
   if (ec) return bad(fmt::format("{}: {}", o.out, ec.message()));
   if (o.kind == "cell") return synthCell(o, *spec);
+  if (o.kind == "handeye-cloud") {
+    if (o.configuration == "eye-in-hand") return synthHandEyeCloud(o, calib::HandEyeConfig::EyeInHand);
+    if (o.configuration == "eye-to-hand") return synthHandEyeCloud(o, calib::HandEyeConfig::EyeToHand);
+    return bad(fmt::format("--configuration '{}': expected eye-in-hand or eye-to-hand", o.configuration));
+  }
   const sim::TrueCamera cam = sim::defaultCalibCamera();
   // The true camera, in the intrinsics file format (for comparison).
   if (auto w = writeCameraTruth(cam, fs::path(o.out) / "camera_truth.yaml"); !w) return bad(w.error().message);
@@ -131,7 +179,7 @@ int runCalibrateSynth(const CalibSynthOptions& o) {
     std::printf("%zu plate images and camera_truth.yaml in %s\n", poses.size(), o.out.c_str());
     return 0;
   }
-  if (o.kind != "handeye") return bad(fmt::format("--kind '{}': expected intrinsics, handeye or cell", o.kind));
+  if (o.kind != "handeye") return bad(fmt::format("--kind '{}': expected intrinsics, handeye, handeye-cloud or cell", o.kind));
   calib::HandEyeConfig cfg;
   if (o.configuration == "eye-in-hand") cfg = calib::HandEyeConfig::EyeInHand;
   else if (o.configuration == "eye-to-hand") cfg = calib::HandEyeConfig::EyeToHand;
@@ -147,7 +195,11 @@ int runCalibrateSynth(const CalibSynthOptions& o) {
 CLI::App* CalibrateSynthCommand::add(CLI::App& parent) {
   auto& calSyn = options_;
   auto* calSynCmd = parent.add_subcommand("synth", "render a synthetic calibration set with ground truth");
-  calSynCmd->add_option("--kind", calSyn.kind, "intrinsics, handeye or cell (all three sets for a cell's camera)");
+  calSynCmd->add_option("--kind", calSyn.kind,
+                        "intrinsics, handeye, handeye-cloud (a depth camera and a sphere target) or cell (all three sets for a "
+                        "cell's camera)");
+  calSynCmd->add_option("--depth-noise-mm", calSyn.depthNoiseMm, "handeye-cloud: Gaussian depth noise per pixel, mm")
+      ->check(CLI::Range(0.0, 10.0));
   calSynCmd->add_option("--cell", calSyn.cellConfig, "cell config for --kind cell (default: the embedded sim cell)");
   calSynCmd->add_option("--out", calSyn.out, "folder to write")->required();
   calSynCmd->add_option("--configuration", calSyn.configuration, "eye-in-hand or eye-to-hand (handeye)");

@@ -12,7 +12,7 @@
 namespace vgr::tools {
 
 struct CalibSynthOptions {
-  std::string kind = "intrinsics";     // intrinsics | handeye | cell
+  std::string kind = "intrinsics";     // intrinsics | handeye | handeye-cloud | cell
   std::string cellConfig;              // cell: the cell config whose camera to use (default: the embedded sim cell)
   std::string out;                     // folder (created)
   std::string configuration = "eye-to-hand";
@@ -23,6 +23,7 @@ struct CalibSynthOptions {
   double robotNoiseMm = 0.05, robotNoiseDeg = 0.01;
   double maxTiltDeg = 40, distanceMm = 420;
   double partialShare = 0;             // share of views with the plate partly outside the image (charuco)
+  double depthNoiseMm = 0.3;           // handeye-cloud: Gaussian depth noise per pixel, mm
 };
 
 int runCalibrateSynth(const CalibSynthOptions& o);

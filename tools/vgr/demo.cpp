@@ -20,6 +20,7 @@
 
 #include "config/cell_config.hpp"
 #include "core/child_process.hpp"
+#include "core/pose.hpp"
 #include "sim/cell_scenes.hpp"
 #include "sim/dataset.hpp"
 #include "tools/vgr/notify_listener.hpp"
@@ -51,6 +52,17 @@ double percentile(std::vector<double> v, double q) {
 double angleDiffDeg(double a, double b) { return std::abs(std::remainder(a - b, 360.0)); }
 
 double round3(double v) { return std::round(v * 1000.0) / 1000.0; }
+
+// The rotation of a journal part (or a vgr-sim-robot line): rz_deg, ry_deg, rx_deg, Z-Y-X.
+Pose journalRotation(const json& j) {
+  return poseFromEulerZyxDeg(0, 0, 0, EulerZyxDeg{j.value("rz_deg", 0.0), j.value("ry_deg", 0.0), j.value("rx_deg", 0.0)});
+}
+
+// The angle of a^-1 b, degrees [0, 180].
+double rotationDiffDeg(const Pose& a, const Pose& b) {
+  const Pose d = compose(inverse(a), b);
+  return 2.0 * std::acos(std::min(1.0, std::abs(d.qw))) * 180.0 / M_PI;
+}
 
 struct RobotTally {
   int replies = 0, valid = 0, invalid = 0, ok = 0, mismatched = 0;
@@ -480,22 +492,25 @@ int runDemo(const DemoOptions& o) {
       }
       // One of the cycle's parts (several parts per frame are served one per request): a
       // robot in offset mode or a user frame gets what the journal's "robots" entry says
-      // for it (x, y, z, rz, ry, rx); the others the part's base-frame pose.
+      // for it (x, y, z, rz, ry, rx); the others the part's base-frame pose. All six degrees
+      // of freedom: the position, and the angle between the two rotations (the robot's reply
+      // converted from its dialect's notation, the journal's Z-Y-X).
       const auto& line = jit->second;
       const bool framed = line.contains("robots") && line["robots"].contains(name);
       bool matches = false;
       for (std::size_t k = 0; k < line["parts"].size(); ++k) {
         const auto& part = line["parts"][k];
-        double x = part.value("x_mm", 0.0), y = part.value("y_mm", 0.0), rz = part.value("rz_deg", 0.0);
+        json expected = part;
         if (framed) {
           const auto& poses = line["robots"][name]["poses"];
           if (k >= poses.size()) continue;
-          x = poses[k][0].get<double>();
-          y = poses[k][1].get<double>();
-          rz = poses[k][3].get<double>();
+          expected = json{{"x_mm", poses[k][0]}, {"y_mm", poses[k][1]}, {"z_mm", poses[k][2]},
+                          {"rz_deg", poses[k][3]}, {"ry_deg", poses[k][4]}, {"rx_deg", poses[k][5]}};
         }
-        if (std::abs(x - j.value("x_mm", 1e9)) <= 0.01 && std::abs(y - j.value("y_mm", 1e9)) <= 0.01 &&
-            angleDiffDeg(rz, j.value("rz_deg", 1e9)) <= 0.01 &&
+        if (std::abs(expected.value("x_mm", 0.0) - j.value("x_mm", 1e9)) <= 0.01 &&
+            std::abs(expected.value("y_mm", 0.0) - j.value("y_mm", 1e9)) <= 0.01 &&
+            std::abs(expected.value("z_mm", 0.0) - j.value("z_mm", 1e9)) <= 0.01 &&
+            rotationDiffDeg(journalRotation(expected), journalRotation(j)) <= 0.01 &&
             (!j.contains("label") || part.value("label", -1) == j.value("label", -2)))
           matches = true;
       }

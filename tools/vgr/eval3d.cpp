@@ -74,7 +74,7 @@ int runEval3d(const Eval3dCliOptions& o) {
   eo.transTolMm = o.transTolMm;
   eo.rotTolDeg = o.rotTolDeg;
   vision::cloud::Eval3dAccumulator acc(std::move(addPoints), eo);
-  const vision::cloud::DepthIntrinsics k{cam->width, cam->height, cam->fx, cam->fy, cam->cx, cam->cy};
+  const vision::cloud::DepthIntrinsics k = cam->intrinsics();
   for (std::size_t i = 0; i < images.size(); ++i) {
     const double c0 = threadCpuMs();
     const auto w0 = std::chrono::steady_clock::now();

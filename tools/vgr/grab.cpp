@@ -17,6 +17,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "config/cell_config.hpp"
+#include "config/depth_dataset.hpp"
 #include "drivers/aravis_camera.hpp"
 #include "drivers/camera.hpp"
 #include "drivers/camera_worker.hpp"
@@ -24,6 +25,9 @@
 
 namespace vgr::tools {
 namespace {
+
+// Depth frames saved by --save: 0.1 mm per unit of the 16-bit PNGs (0 .. 6.5 m).
+constexpr double kSaveDepthScaleMm = 0.1;
 
 using Clock = std::chrono::steady_clock;
 using std::chrono::milliseconds;
@@ -118,12 +122,42 @@ int runGrab(const GrabOptions& o) {
   std::map<std::string, int> errors;
   int ok = 0;
   const auto runStart = Clock::now();
+  bool depthSetStarted = false;
   for (int i = 0; i < o.count; ++i) {
     const auto t0 = Clock::now();
     drivers::FrameStatus st = drivers::FrameStatus::Ok;
     auto r = worker.grab(frame, t0 + milliseconds(deadlineMs), &st);
     const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-    if (r && !o.saveFolder.empty()) {
+    if (r && !o.saveFolder.empty() && frame.depth()) {
+      // A depth camera: the frames as a 3D data set (config/depth_dataset.hpp):
+      // images/frame_<id>.png in units of kSaveDepthScaleMm, camera.yaml from the first frame.
+      if (!depthSetStarted) {
+        config::DepthCameraFile camFile;
+        camFile.width = frame.width;
+        camFile.height = frame.height;
+        camFile.setIntrinsics(frame.intrinsics);
+        camFile.depthScaleMm = kSaveDepthScaleMm;
+        std::error_code dirEc;
+        std::filesystem::create_directories(std::filesystem::path(o.saveFolder) / "images", dirEc);
+        if (auto w = config::writeDepthCameraFile(o.saveFolder + "/camera.yaml", camFile); !w || dirEc) {
+          std::fprintf(stderr, "vgr grab: cannot write the 3D data set in %s\n", o.saveFolder.c_str());
+          return 1;
+        }
+        depthSetStarted = true;
+      }
+      const cv::Mat z(frame.height, frame.width, CV_32FC1, frame.data.data());
+      cv::Mat units(frame.height, frame.width, CV_16UC1);
+      for (int v = 0; v < z.rows; ++v)
+        for (int u = 0; u < z.cols; ++u) {
+          const double q = std::round(z.at<float>(v, u) / kSaveDepthScaleMm);
+          units.at<std::uint16_t>(v, u) = q > 0 && q <= 65535 ? static_cast<std::uint16_t>(q) : 0;  // beyond 6.5 m: no data
+        }
+      const std::string path = fmt::format("{}/images/frame_{:06d}.png", o.saveFolder, frame.frameId);
+      if (!cv::imwrite(path, units)) {
+        std::fprintf(stderr, "vgr grab: cannot write %s\n", path.c_str());
+        return 1;
+      }
+    } else if (r && !o.saveFolder.empty()) {
       // Mono8 as it is; Mono10/12/16 scaled to the full 16-bit range (vision/gray_image.hpp),
       // so the tools read back exactly what vgrd locates in.
       const cv::Mat samples(frame.height, frame.width, frame.bytesPerPixel() == 2 ? CV_16UC1 : CV_8UC1, frame.data.data());
@@ -183,13 +217,15 @@ CLI::App* GrabCommand::add(CLI::App& parent) {
   grabCmd->add_option("--config", grab.configPath, "cell config whose camera section gives the features");
   grabCmd->add_option("--count", grab.count, "number of triggers")->check(CLI::Range(1, 10000000));
   grabCmd->add_option("--trigger", grab.trigger, "software, hardware or free_run (default: the config's, else software)");
-  grabCmd->add_option("--pixel-format", grab.pixelFormat, "Mono8, Mono10, Mono12, Mono16, BayerRG8, ...");
+  grabCmd->add_option("--pixel-format", grab.pixelFormat, "Mono8, Mono10, Mono12, Mono16, BayerRG8, ..., Coord3D_C16");
   grabCmd->add_option("--packet-size", grab.packetSize, "GigE packet size in bytes (0 negotiates)")->check(CLI::Range(0, 65000));
   grabCmd->add_option("--retries", grab.retries, "re-triggers after a lost frame within the deadline")->check(CLI::Range(0, 10));
   grabCmd->add_option("--timeout-ms", grab.timeoutMs, "trigger -> frame timeout per attempt")->check(CLI::Range(50, 60000));
   grabCmd->add_option("--deadline-ms", grab.deadlineMs, "trigger -> frame deadline incl. re-triggers (default: cycle_deadline_ms)")->check(CLI::Range(50, 600000));
   grabCmd->add_option("--interval-ms", grab.intervalMs, "pause between triggers")->check(CLI::Range(0, 60000));
-  grabCmd->add_option("--save", grab.saveFolder, "write every frame received to this folder as frame_<frame id>.png");
+  grabCmd->add_option("--save", grab.saveFolder,
+                      "write every frame received to this folder as frame_<frame id>.png (a depth camera: a 3D data set, "
+                      "camera.yaml + images/, 0.1 mm per unit)");
   grabCmd->add_flag("--json", grab.json, "JSON output; the last line is {\"frames\",\"ok\",\"errors\",\"p50_ms\",\"p99_ms\"}");
   return grabCmd;
 }

@@ -1,8 +1,13 @@
 #include "tools/vgr/locate.hpp"
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <memory>
+#include <optional>
+#include <string_view>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -47,6 +52,33 @@ int runLocate(const LocateOptions& o) {
                                   size->height, o.image, img.cols, img.rows));
     rules.heightMm = job->partHeightMm;
   }
+  // Eye-in-hand: the image maps with the camera where the flange was.
+  std::optional<vision::calib::SnapshotMapping> snapshot;
+  if (mapping && mapping->eyeInHand()) {
+    if (o.flange.empty())
+      return badInput(job->calibrationPath() + ": the calibration is eye-in-hand (the camera on the flange): give the image's "
+                                               "flange pose with --flange x,y,z,qw,qx,qy,qz");
+    std::vector<double> v;
+    std::string_view rest(o.flange);
+    while (true) {
+      const auto comma = rest.find(',');
+      const std::string field(rest.substr(0, comma));
+      char* end = nullptr;
+      const double d = std::strtod(field.c_str(), &end);
+      if (field.empty() || end != field.c_str() + field.size() || !std::isfinite(d))
+        return badInput("--flange: '" + field + "' is not a number (expected x,y,z,qw,qx,qy,qz)");
+      v.push_back(d);
+      if (comma == std::string_view::npos) break;
+      rest.remove_prefix(comma + 1);
+    }
+    const double n = v.size() == 7 ? std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5] + v[6] * v[6]) : 0.0;
+    if (v.size() != 7 || std::abs(n - 1.0) > 1e-3)
+      return badInput("--flange: expected x,y,z,qw,qx,qy,qz (mm and a unit quaternion), got '" + o.flange + "'");
+    snapshot.emplace(*mapping->eyeInHand(), poseFromQuaternion(v[0], v[1], v[2], v[3], v[4], v[5], v[6]));
+  } else if (!o.flange.empty()) {
+    return badInput("--flange goes with an eye-in-hand calibration; this job's camera is fixed");
+  }
+  const vision::calib::PixelMapping* mapWith = snapshot ? &*snapshot : mapping.get();
   auto locator = daemon::makeJobLocator(*job, method);
   if (!locator) return badInput(locator.error().message);
   if (!o.overlay.empty()) {
@@ -91,8 +123,8 @@ int runLocate(const LocateOptions& o) {
       p["label"] = d.label;
       p["confidence"] = d.confidence;
     }
-    if (mapping) {
-      const auto parts = vision::partPoses({d}, *mapping, rules);
+    if (mapWith) {
+      const auto parts = vision::partPoses({d}, *mapWith, rules);
       if (!parts.empty()) {
         const Pose& pose = parts.front().pose;
         p["x_mm"] = pose.x;
@@ -123,6 +155,7 @@ CLI::App* LocateCommand::add(CLI::App& parent) {
   locateCmd->add_option("--image", l.image, "image file")->required();
   locateCmd->add_option("--method", l.method, "override the job's method");
   locateCmd->add_flag("--json", l.json, "one JSON object: status, time_ms, parts");
+  locateCmd->add_option("--flange", l.flange, "eye-in-hand calibration: the image's flange pose x,y,z,qw,qx,qy,qz (mm)");
   locateCmd->add_option("--overlay", l.overlay, "write the image with the parts, grasp points and search ROI drawn on it (PNG)");
   return locateCmd;
 }

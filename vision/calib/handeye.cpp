@@ -8,6 +8,7 @@
 #include <fmt/core.h>
 #include <opencv2/calib3d.hpp>
 
+#include "vision/calib/handeye_solvers.hpp"
 #include "vision/calib/levmarq.hpp"
 #include "vision/calib/se3.hpp"
 
@@ -15,28 +16,8 @@ namespace vgr::vision::calib {
 namespace {
 
 using se3::Iso;
+namespace hd = handeye_detail;
 constexpr double kDeg = M_PI / 180.0;
-
-cv::Mat toCvR(const Iso& t) {
-  cv::Mat r(3, 3, CV_64F);
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) r.at<double>(i, j) = t.linear()(i, j);
-  return r;
-}
-cv::Mat toCvT(const Iso& t) {
-  return (cv::Mat_<double>(3, 1) << t.translation().x(), t.translation().y(), t.translation().z());
-}
-Iso fromCv(const cv::Mat& r, const cv::Mat& t) {
-  Iso out = Iso::Identity();
-  cv::Mat r64, t64;
-  r.convertTo(r64, CV_64F);
-  t.convertTo(t64, CV_64F);
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) out.linear()(i, j) = r64.at<double>(i, j);
-    out.translation()(i) = t64.at<double>(i);
-  }
-  return out;
-}
 
 // The data every method and the refinement work on.
 struct Problem {
@@ -49,34 +30,19 @@ struct Problem {
   cv::Matx33d k;
   cv::Vec<double, 5> d;
 
-  // Y seen through view i for a given X (should be the same for every view).
-  Iso yFromView(const Iso& x, std::size_t i) const {
-    return config == HandEyeConfig::EyeInHand ? Iso(a[i] * x * b[i]) : Iso(a[i].inverse() * x * b[i]);
-  }
   // T_cam_target_i predicted by the chain A_i, X, Y.
-  Iso camFromTarget(const Iso& x, const Iso& y, std::size_t i) const {
-    return config == HandEyeConfig::EyeInHand ? Iso(x.inverse() * a[i].inverse() * y) : Iso(x.inverse() * a[i] * y);
-  }
+  Iso camFromTarget(const Iso& x, const Iso& y, std::size_t i) const { return hd::camFromTarget(config, a[i], x, y); }
 };
 
 void evaluate(const Problem& p, HandEyeMethodResult& m, const Iso& x, const Iso* yGiven) {
-  std::vector<Iso> ys;
-  for (std::size_t i = 0; i < p.a.size(); ++i) ys.push_back(p.yFromView(x, i));
-  const Iso y = yGiven ? *yGiven : se3::meanIso(ys);
-  double st = 0, sr = 0;
-  for (const auto& yi : ys) {
-    st += (yi.translation() - y.translation()).squaredNorm();
-    const double ang = se3::rotationAngleDeg(yi.linear() * y.linear().transpose());
-    sr += ang * ang;
-  }
-  const double n = static_cast<double>(ys.size());
-  m.transResidMm = std::sqrt(st / n);
-  m.rotResidDeg = std::sqrt(sr / n);
+  const hd::Consistency c = hd::consistency(p.config, p.a, p.b, x, yGiven);
+  m.transResidMm = c.transMm;
+  m.rotResidDeg = c.rotDeg;
   double se = 0;
   std::size_t cnt = 0;
   for (std::size_t i = 0; i < p.a.size(); ++i) {
     cv::Vec3d rv, tv;
-    se3::toRvecTvec(p.camFromTarget(x, y, i), rv, tv);
+    se3::toRvecTvec(p.camFromTarget(x, c.y, i), rv, tv);
     std::vector<cv::Point2f> proj;
     cv::projectPoints(p.obj, rv, tv, p.k, p.d, proj);
     for (std::size_t j = 0; j < proj.size(); ++j) {
@@ -87,129 +53,26 @@ void evaluate(const Problem& p, HandEyeMethodResult& m, const Iso& x, const Iso*
   }
   m.reprojRmsPx = std::sqrt(se / std::max<std::size_t>(cnt, 1));
   m.x = se3::toPose(x);
-  m.y = se3::toPose(y);
+  m.y = se3::toPose(c.y);
 }
 
-// Joint maximum-likelihood refinement of X, Y and a small correction C_i per robot pose
-// (A_i' = C_i A_i, C_i = exp(xi_i), paper 003 eqs. 4-8 for the parametrisation). Residuals:
-// reprojection / sigmaPx for every pattern point, and xi_i / (sigmaMm, sigmaRad) as the prior
-// that the controller's pose is right within its repeatability. The same hand-written LM as
-// levmarq.hpp, with the Jacobian's block structure used: C_i only moves view i's residuals.
+// The joint refinement (handeye_solvers.hpp) with the reprojection of every pattern point
+// through A_i', X, Y as the measurement, / sigmaPx.
 void refineJoint(const Problem& p, Iso& x, Iso& y, double sigmaPx, double sigmaMm, double sigmaRad) {
-  const std::size_t n = p.a.size(), m = p.obj.size();
-  const Eigen::Index rowsPerView = static_cast<Eigen::Index>(2 * m + 6);
-  const Eigen::Index nr = rowsPerView * static_cast<Eigen::Index>(n), np = 12 + 6 * static_cast<Eigen::Index>(n);
-  std::vector<Iso> c(n, Iso::Identity());
-  auto viewRes = [&](const Iso& xx, const Iso& yy, const Iso& ci, std::size_t i) {
-    Eigen::VectorXd r(rowsPerView);
-    const Iso a = ci * p.a[i];
-    const Iso ct = p.config == HandEyeConfig::EyeInHand ? Iso(xx.inverse() * a.inverse() * yy) : Iso(xx.inverse() * a * yy);
-    cv::Vec3d rv, tv;
-    se3::toRvecTvec(ct, rv, tv);
-    std::vector<cv::Point2f> proj;
-    cv::projectPoints(p.obj, rv, tv, p.k, p.d, proj);
-    for (std::size_t j = 0; j < m; ++j) {
-      r(static_cast<Eigen::Index>(2 * j)) = (proj[j].x - p.img[i][j].x) / sigmaPx;
-      r(static_cast<Eigen::Index>(2 * j + 1)) = (proj[j].y - p.img[i][j].y) / sigmaPx;
-    }
-    const se3::Vec6 xi = se3::logSe3(ci);
-    r.segment<3>(static_cast<Eigen::Index>(2 * m)) = xi.head<3>() / sigmaMm;
-    r.segment<3>(static_cast<Eigen::Index>(2 * m + 3)) = xi.tail<3>() / sigmaRad;
-    return r;
-  };
-  auto allRes = [&](const Iso& xx, const Iso& yy, const std::vector<Iso>& cc) {
-    Eigen::VectorXd r(nr);
-    for (std::size_t i = 0; i < n; ++i) r.segment(rowsPerView * static_cast<Eigen::Index>(i), rowsPerView) = viewRes(xx, yy, cc[i], i);
-    return r;
-  };
-  auto step = [](const Iso& t, const se3::Vec6& d) { return Iso(se3::expSe3(d) * t); };
-  Eigen::VectorXd r = allRes(x, y, c);
-  double cost = r.squaredNorm(), lambda = 1e-3;
-  for (int it = 0; it < 30; ++it) {
-    Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(nr, np);
-    for (int col = 0; col < 12; ++col) {
-      const double h = (col % 6) < 3 ? 1e-4 : 1e-6;
-      se3::Vec6 d = se3::Vec6::Zero();
-      d(col % 6) = h;
-      const bool isX = col < 6;
-      const Eigen::VectorXd rp = allRes(isX ? step(x, d) : x, isX ? y : step(y, d), c);
-      const Eigen::VectorXd rm = allRes(isX ? step(x, -d) : x, isX ? y : step(y, -d), c);
-      jac.col(col) = (rp - rm) / (2 * h);
-    }
-    for (std::size_t i = 0; i < n; ++i)
-      for (int k = 0; k < 6; ++k) {
-        const double h = k < 3 ? 1e-4 : 1e-6;
-        se3::Vec6 d = se3::Vec6::Zero();
-        d(k) = h;
-        const Eigen::VectorXd rp = viewRes(x, y, step(c[i], d), i), rm = viewRes(x, y, step(c[i], -d), i);
-        jac.block(rowsPerView * static_cast<Eigen::Index>(i), 12 + 6 * static_cast<Eigen::Index>(i) + k, rowsPerView, 1) =
-            (rp - rm) / (2 * h);
-      }
-    const Eigen::MatrixXd jtj = jac.transpose() * jac;
-    const Eigen::VectorXd g = jac.transpose() * r;
-    bool improved = false;
-    for (int tries = 0; tries < 10 && !improved; ++tries) {
-      const Eigen::VectorXd dlt = dampedStep(jtj, g, lambda);
-      const Iso xc = step(x, dlt.segment<6>(0)), yc = step(y, dlt.segment<6>(6));
-      std::vector<Iso> cc(n);
-      for (std::size_t i = 0; i < n; ++i) cc[i] = step(c[i], dlt.segment<6>(12 + 6 * static_cast<Eigen::Index>(i)));
-      const Eigen::VectorXd rc = allRes(xc, yc, cc);
-      const double costC = rc.squaredNorm();
-      if (std::isfinite(costC) && costC < cost) {
-        const double rel = (cost - costC) / std::max(cost, 1e-30);
-        x = xc, y = yc, c = cc, r = rc, cost = costC;
-        lambda = std::max(lambda / 10, 1e-12);
-        improved = true;
-        if (rel < 1e-10) return;
-      } else {
-        lambda *= 10;
-      }
-    }
-    if (!improved) return;
-  }
-}
-
-std::string joinNames(const std::vector<std::string>& v) {
-  std::string s;
-  for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
-  return s;
-}
-
-Result<void> checkMotion(const Problem& p, const HandEyeOptions& o, std::vector<std::string>& warnings) {
-  const std::size_t n = p.a.size();
-  double maxAngle = 0;
-  std::vector<Eigen::Vector3d> axes;
-  for (std::size_t i = 0; i < n; ++i)
-    for (std::size_t j = i + 1; j < n; ++j) {
-      const Iso rel = p.a[i].inverse() * p.a[j];
-      const Eigen::AngleAxisd aa(rel.linear());
-      const double ang = aa.angle() / kDeg;
-      maxAngle = std::max(maxAngle, ang);
-      if (ang > 2.0) axes.push_back(aa.axis());
-      if (rel.translation().norm() < o.duplicateMm && ang < o.duplicateDeg)
-        warnings.push_back(fmt::format("views '{}' and '{}' have the same robot pose ({:.3f} mm, {:.3f} deg apart): "
-                                       "duplicates add no information",
-                                       p.names[i], p.names[j], rel.translation().norm(), ang));
-    }
-  if (maxAngle < o.minRotationDeg)
-    return fail(Status::BadArgument,
-                fmt::format("degenerate motion: the largest rotation between any two of the {} robot poses ({}) is "
-                            "{:.2f} deg, at least {:.0f} deg about two different axes is needed",
-                            n, joinNames(p.names), maxAngle, o.minRotationDeg));
-  double spread = 0;
-  for (std::size_t i = 0; i < axes.size(); ++i)
-    for (std::size_t j = i + 1; j < axes.size(); ++j)
-      spread = std::max(spread, std::acos(std::min(1.0, std::abs(axes[i].dot(axes[j])))) / kDeg);
-  if (spread < o.minAxisSpreadDeg)
-    return fail(Status::BadArgument,
-                fmt::format("degenerate motion: every rotation between the robot poses ({}) is about the same axis "
-                            "(spread {:.2f} deg); rotate about at least two different axes",
-                            joinNames(p.names), spread));
-  if (maxAngle > 120)
-    warnings.push_back(fmt::format("relative rotations up to {:.0f} deg: Tsai is unreliable above ~120 deg "
-                                   "(checked by consistency below)",
-                                   maxAngle));
-  return {};
+  const std::size_t m = p.obj.size();
+  hd::refineJoint(
+      p.a, 2 * m,
+      [&](const Iso& xx, const Iso& yy, const Iso& a, std::size_t i, Eigen::Ref<Eigen::VectorXd> out) {
+        cv::Vec3d rv, tv;
+        se3::toRvecTvec(hd::camFromTarget(p.config, a, xx, yy), rv, tv);
+        std::vector<cv::Point2f> proj;
+        cv::projectPoints(p.obj, rv, tv, p.k, p.d, proj);
+        for (std::size_t j = 0; j < m; ++j) {
+          out(static_cast<Eigen::Index>(2 * j)) = (proj[j].x - p.img[i][j].x) / sigmaPx;
+          out(static_cast<Eigen::Index>(2 * j + 1)) = (proj[j].y - p.img[i][j].y) / sigmaPx;
+        }
+      },
+      x, y, sigmaMm, sigmaRad);
 }
 
 }  // namespace
@@ -243,68 +106,20 @@ Result<HandEyeResult> calibrateHandEye(const std::vector<HandEyeView>& views, co
     p.b.push_back(se3::fromRvecTvec(rv, tv));
     p.img.push_back(v.corners);
   }
-  if (auto ok = checkMotion(p, options, res.warnings); !ok) return std::unexpected(ok.error());
+  if (auto ok = hd::checkPoseSet(p.names, p.a, options, res.warnings); !ok) return std::unexpected(ok.error());
 
-  // OpenCV inputs. calibrateHandEye solves eye-in-hand (gripper2base, target2cam ->
-  // cam2gripper); for eye-to-hand the robot poses are inverted (base2gripper) and the
-  // output is cam2base.
-  std::vector<cv::Mat> rG, tG, rT, tT, rW2C, tW2C, rB2G, tB2G;
-  for (std::size_t i = 0; i < p.a.size(); ++i) {
-    const Iso g = config == HandEyeConfig::EyeInHand ? p.a[i] : p.a[i].inverse();
-    rG.push_back(toCvR(g));
-    tG.push_back(toCvT(g));
-    rT.push_back(toCvR(p.b[i]));
-    tT.push_back(toCvT(p.b[i]));
-    // Robot-world-hand-eye, A X = Z B with A = cTw, B = gTb: eye-in-hand uses the plate as
-    // the world; eye-to-hand swaps roles (the plate plays the camera, the camera the world).
-    const Iso w2c = config == HandEyeConfig::EyeInHand ? p.b[i] : p.b[i].inverse();
-    rW2C.push_back(toCvR(w2c));
-    tW2C.push_back(toCvT(w2c));
-    const Iso b2g = p.a[i].inverse();
-    rB2G.push_back(toCvR(b2g));
-    tB2G.push_back(toCvT(b2g));
-  }
-  const std::pair<const char*, cv::HandEyeCalibrationMethod> heMethods[] = {
-      {"tsai", cv::CALIB_HAND_EYE_TSAI},       {"park", cv::CALIB_HAND_EYE_PARK},
-      {"horaud", cv::CALIB_HAND_EYE_HORAUD},   {"andreff", cv::CALIB_HAND_EYE_ANDREFF},
-      {"daniilidis", cv::CALIB_HAND_EYE_DANIILIDIS}};
-  auto addChecked = [&](const char* name, const std::function<Iso()>& solve) {
+  for (const auto& c : hd::closedFormSolutions(config, p.a, p.b)) {
     HandEyeMethodResult m;
-    m.method = name;
-    Iso x;
-    try {
-      x = solve();
-    } catch (const cv::Exception& e) {
-      m.note = fmt::format("OpenCV threw: {}", e.err);
-      res.methods.push_back(m);
-      return;
+    m.method = c.method;
+    m.note = c.note;
+    if (c.x) {
+      evaluate(p, m, *c.x, nullptr);
+      m.valid = m.rotResidDeg <= options.maxRotResidDeg && m.transResidMm <= options.maxTransResidMm;
+      if (!m.valid)
+        m.note = fmt::format("inconsistent: views disagree by {:.2f} mm / {:.3f} deg RMS", m.transResidMm, m.rotResidDeg);
     }
-    if (!se3::isValidRigid(x) || x.translation().norm() > 1e5) {
-      m.note = x.matrix().allFinite() ? "not a rigid transform or translation > 100 m" : "NaN in the result";
-      res.methods.push_back(m);
-      return;
-    }
-    evaluate(p, m, x, nullptr);
-    m.valid = m.rotResidDeg <= options.maxRotResidDeg && m.transResidMm <= options.maxTransResidMm;
-    if (!m.valid)
-      m.note = fmt::format("inconsistent: views disagree by {:.2f} mm / {:.3f} deg RMS", m.transResidMm, m.rotResidDeg);
     res.methods.push_back(m);
-  };
-  for (const auto& [name, method] : heMethods)
-    addChecked(name, [&, method = method]() {
-      cv::Mat r, t;
-      cv::calibrateHandEye(rG, tG, rT, tT, r, t, method);
-      return fromCv(r, t);
-    });
-  const std::pair<const char*, cv::RobotWorldHandEyeCalibrationMethod> rwMethods[] = {
-      {"rwhe-shah", cv::CALIB_ROBOT_WORLD_HAND_EYE_SHAH}, {"rwhe-li", cv::CALIB_ROBOT_WORLD_HAND_EYE_LI}};
-  for (const auto& [name, method] : rwMethods)
-    addChecked(name, [&, method = method]() {
-      cv::Mat rb2w, tb2w, rg2c, tg2c;
-      cv::calibrateRobotWorldHandEye(rW2C, tW2C, rB2G, tB2G, rb2w, tb2w, rg2c, tg2c, method);
-      // eye-in-hand: Z = T_cam_gripper = X^-1; eye-to-hand: X_out = T_cam_base = X^-1.
-      return config == HandEyeConfig::EyeInHand ? Iso(fromCv(rg2c, tg2c).inverse()) : Iso(fromCv(rb2w, tb2w).inverse());
-    });
+  }
 
   int seed = -1;
   for (std::size_t i = 0; i < res.methods.size(); ++i)

@@ -40,6 +40,8 @@ struct HandEyeMethodResult {
   double transResidMm = 0;     // RMS over views of |Y_i - Y| translation (Y_i from view i)
   double rotResidDeg = 0;      // RMS over views of the angle of Y_i Y^-1
   double reprojRmsPx = 0;      // RMS reprojection error of the plate through A_i, X, Y
+  double pointRmsMm = 0;       // depth camera (handeye_cloud.hpp): RMS distance of the measured
+                               // target points to the target through A_i, X, Y; 0 otherwise
 };
 
 struct HandEyeResult {
@@ -86,9 +88,12 @@ struct HandEyeFile {
   Pose x, y;
   std::string method;
   double transResidMm = 0, rotResidDeg = 0, reprojRmsPx = 0;
+  double pointRmsMm = 0;  // depth-camera calibrations (key point_rms_mm; 0 when absent)
 };
 Result<HandEyeFile> readHandEye(const std::string& path);
 
 // The robot pose file the views' baseFromGripper come from: vision/calib/robot_pose_file.hpp.
+// With a depth camera the target is measured as points in mm, not pixels:
+// vision/calib/handeye_cloud.hpp (paper 003's point-cloud registration).
 
 }  // namespace vgr::vision::calib

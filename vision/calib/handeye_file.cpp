@@ -53,10 +53,12 @@ Result<void> writeHandEye(const std::string& path, const HandEyeResult& r) {
     fs << "x" << mat(b.x) << "y" << mat(b.y);
     fs << "method" << b.method << "reason" << r.reason;
     fs << "trans_resid_mm" << b.transResidMm << "rot_resid_deg" << b.rotResidDeg << "reproj_rms_px" << b.reprojRmsPx;
+    fs << "point_rms_mm" << b.pointRmsMm;
     fs << "methods" << "[";
     for (const auto& m : r.methods)
       fs << "{" << "method" << m.method << "valid" << (m.valid ? 1 : 0) << "trans_resid_mm" << m.transResidMm
-         << "rot_resid_deg" << m.rotResidDeg << "reproj_rms_px" << m.reprojRmsPx << "note" << m.note << "}";
+         << "rot_resid_deg" << m.rotResidDeg << "reproj_rms_px" << m.reprojRmsPx << "point_rms_mm" << m.pointRmsMm
+         << "note" << m.note << "}";
     fs << "]";
   } catch (const std::exception& e) {  // cv::Exception, and what FileStorage lets through (std::length_error)
     return fail(Status::BadArgument, fmt::format("{}: {}", path, e.what()));
@@ -91,6 +93,7 @@ Result<HandEyeFile> readHandEye(const std::string& path) {
     f.transResidMm = static_cast<double>(fs["trans_resid_mm"]);
     f.rotResidDeg = static_cast<double>(fs["rot_resid_deg"]);
     f.reprojRmsPx = static_cast<double>(fs["reproj_rms_px"]);
+    f.pointRmsMm = fs["point_rms_mm"].empty() ? 0.0 : static_cast<double>(fs["point_rms_mm"]);
   } catch (const std::exception& e) {  // cv::Exception, and what FileStorage lets through (std::length_error)
     return fail(Status::NotCalibrated, fmt::format("{}: {}", path, e.what()));
   }

@@ -17,6 +17,31 @@ namespace {
 Eigen::Vector3d ev(const Vec3& v) { return {v.x, v.y, v.z}; }
 Vec3 vv(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 
+// The plane's normal turned toward the camera at camPos (heights count toward the camera).
+Eigen::Vector3d normalTowardCamera(const WorkPlane& plane, const Eigen::Vector3d& camPos) {
+  Eigen::Vector3d n = ev(plane.normal).normalized();
+  if (n.dot(camPos - ev(plane.point)) < 0) n = -n;
+  return n;
+}
+
+// Distortion removed (iteratively, to 1e-12), then the normalised ray (paper 002, eqs. 5-7)
+// in the base frame, intersected with the plane raised by heightMm along n (eqs. 8-11).
+std::optional<Vec3> rayOnPlane(const CameraIntrinsics& camera, const Pose& baseFromCamera, const Vec3& planePoint,
+                               const Eigen::Vector3d& n, PixelPoint p, double heightMm) {
+  std::vector<cv::Point2d> src{{p.u, p.v}}, dst;
+  cv::undistortPoints(src, dst, camera.cameraMatrix, camera.dist, cv::noArray(), cv::noArray(),
+                      cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 50, 1e-12));
+  const se3::Iso t = se3::toIso(baseFromCamera);
+  const Eigen::Vector3d dir = t.linear() * Eigen::Vector3d(dst[0].x, dst[0].y, 1.0);
+  const Eigen::Vector3d o = t.translation();
+  const Eigen::Vector3d q = ev(planePoint) + heightMm * n;
+  const double den = n.dot(dir);
+  if (std::abs(den) < 1e-12) return std::nullopt;
+  const double s = n.dot(q - o) / den;
+  if (s <= 0) return std::nullopt;
+  return vv(o + s * dir);
+}
+
 }  // namespace
 
 WorkPlane planeFromPlate(const Pose& baseFromCamera, const Pose& camFromPlate, double plateThicknessMm) {
@@ -54,28 +79,27 @@ Result<WorkPlane> planeFromPoints(const std::vector<Vec3>& pts) {
 CameraPlaneMapping::CameraPlaneMapping(const CameraIntrinsics& camera, const Pose& baseFromCamera,
                                        const WorkPlane& plane)
     : camera_(camera), baseFromCamera_(baseFromCamera), plane_(plane) {
-  Eigen::Vector3d n = ev(plane_.normal).normalized();
-  const Eigen::Vector3d camPos = se3::toIso(baseFromCamera_).translation();
-  if (n.dot(camPos - ev(plane_.point)) < 0) n = -n;
-  plane_.normal = vv(n);
+  plane_.normal = vv(normalTowardCamera(plane_, se3::toIso(baseFromCamera_).translation()));
+}
+
+EyeInHandPlaneMapping::EyeInHandPlaneMapping(const CameraIntrinsics& camera, const Pose& flangeFromCamera,
+                                             const WorkPlane& plane)
+    : camera_(camera), flangeFromCamera_(flangeFromCamera), plane_(plane) {
+  plane_.normal = vv(ev(plane_.normal).normalized());
+}
+
+Pose EyeInHandPlaneMapping::baseFromCamera(const Pose& baseFromFlange) const {
+  return compose(baseFromFlange, flangeFromCamera_);
+}
+
+std::optional<Vec3> EyeInHandPlaneMapping::pixelToRobot(PixelPoint p, double heightMm, const Pose& baseFromFlange) const {
+  const Pose cam = baseFromCamera(baseFromFlange);
+  const Eigen::Vector3d n = normalTowardCamera(plane_, se3::toIso(cam).translation());
+  return rayOnPlane(camera_, cam, plane_.point, n, p, heightMm);
 }
 
 std::optional<Vec3> CameraPlaneMapping::pixelToRobot(PixelPoint p, double heightMm) const {
-  // Distortion removed (iteratively, to 1e-12), then the normalised ray (paper 002, eqs. 5-7)
-  // in the base frame, intersected with the raised plane (eqs. 8-11).
-  std::vector<cv::Point2d> src{{p.u, p.v}}, dst;
-  cv::undistortPoints(src, dst, camera_.cameraMatrix, camera_.dist, cv::noArray(), cv::noArray(),
-                      cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 50, 1e-12));
-  const se3::Iso t = se3::toIso(baseFromCamera_);
-  const Eigen::Vector3d dir = t.linear() * Eigen::Vector3d(dst[0].x, dst[0].y, 1.0);
-  const Eigen::Vector3d o = t.translation();
-  const Eigen::Vector3d n = ev(plane_.normal);
-  const Eigen::Vector3d q = ev(plane_.point) + heightMm * n;
-  const double den = n.dot(dir);
-  if (std::abs(den) < 1e-12) return std::nullopt;
-  const double s = n.dot(q - o) / den;
-  if (s <= 0) return std::nullopt;
-  return vv(o + s * dir);
+  return rayOnPlane(camera_, baseFromCamera_, plane_.point, ev(plane_.normal), p, heightMm);
 }
 
 std::optional<PixelPoint> CameraPlaneMapping::robotToPixel(const Vec3& pb) const {
@@ -131,8 +155,17 @@ Result<WorkPlane> readWorkPlane(const std::string& path) {
   return p;
 }
 
-Result<CameraPlaneMapping> loadCellCalibration(const std::string& intrinsicsPath, const std::string& handEyePath,
-                                               const std::string& planePath, const CellCalibrationLimits& limits) {
+namespace {
+
+struct CalibrationFiles {
+  CameraIntrinsics camera;
+  HandEyeFile handEye;
+  WorkPlane plane;
+};
+
+// The three files, read and checked against the limits (every configuration).
+Result<CalibrationFiles> readCalibrationFiles(const std::string& intrinsicsPath, const std::string& handEyePath,
+                                              const std::string& planePath, const CellCalibrationLimits& limits) {
   auto cam = readIntrinsics(intrinsicsPath);
   if (!cam) return std::unexpected(cam.error());
   if (cam->rmsPx > limits.maxReprojPx)
@@ -141,28 +174,50 @@ Result<CameraPlaneMapping> loadCellCalibration(const std::string& intrinsicsPath
                                                    intrinsicsPath, cam->rmsPx, limits.maxReprojPx));
   auto he = readHandEye(handEyePath);
   if (!he) return std::unexpected(he.error());
-  if (he->config != HandEyeConfig::EyeToHand)
-    return fail(Status::NotCalibrated, fmt::format("{}: configuration eye-in-hand needs the robot's snapshot pose, "
-                                                   "which vgrd does not take yet; a fixed camera needs eye-to-hand",
-                                                   handEyePath));
   if (he->reprojRmsPx > limits.maxReprojPx || he->transResidMm > limits.maxHandEyeMm ||
-      he->rotResidDeg > limits.maxHandEyeDeg)
+      he->rotResidDeg > limits.maxHandEyeDeg || he->pointRmsMm > limits.maxPointRmsMm)
     return fail(Status::NotCalibrated,
-                fmt::format("{}: residuals {:.3f} px / {:.3f} mm / {:.4f} deg exceed the limits {:.2f} px / {:.2f} mm / "
-                            "{:.2f} deg: recalibrate",
-                            handEyePath, he->reprojRmsPx, he->transResidMm, he->rotResidDeg, limits.maxReprojPx,
-                            limits.maxHandEyeMm, limits.maxHandEyeDeg));
+                fmt::format("{}: residuals {:.3f} px / {:.3f} mm / {:.4f} deg / points {:.3f} mm exceed the limits {:.2f} px / "
+                            "{:.2f} mm / {:.2f} deg / {:.2f} mm: recalibrate",
+                            handEyePath, he->reprojRmsPx, he->transResidMm, he->rotResidDeg, he->pointRmsMm,
+                            limits.maxReprojPx, limits.maxHandEyeMm, limits.maxHandEyeDeg, limits.maxPointRmsMm));
   auto plane = readWorkPlane(planePath);
   if (!plane) return std::unexpected(plane.error());
+  return CalibrationFiles{*cam, *he, *plane};
+}
+
+}  // namespace
+
+Result<CameraPlaneMapping> loadCellCalibration(const std::string& intrinsicsPath, const std::string& handEyePath,
+                                               const std::string& planePath, const CellCalibrationLimits& limits) {
+  auto files = readCalibrationFiles(intrinsicsPath, handEyePath, planePath, limits);
+  if (!files) return std::unexpected(files.error());
+  if (files->handEye.config != HandEyeConfig::EyeToHand)
+    return fail(Status::NotCalibrated, fmt::format("{}: configuration eye-in-hand: the camera rides on the flange and "
+                                                   "maps with each snapshot's flange pose "
+                                                   "(loadEyeInHandCalibration), not as a fixed camera",
+                                                   handEyePath));
   // The camera must see the plane from its front: the optical axis points toward it.
-  const se3::Iso x = se3::toIso(he->x);
+  const se3::Iso x = se3::toIso(files->handEye.x);
   const Eigen::Vector3d axis = x.linear().col(2);
-  const Eigen::Vector3d toPlane = ev(plane->point) - x.translation();
+  const Eigen::Vector3d toPlane = ev(files->plane.point) - x.translation();
   if (axis.dot(toPlane) <= 0)
     return fail(Status::NotCalibrated, fmt::format("{} and {}: the plane lies behind the camera (files from different "
                                                    "cells?)",
                                                    handEyePath, planePath));
-  return CameraPlaneMapping(*cam, he->x, *plane);
+  return CameraPlaneMapping(files->camera, files->handEye.x, files->plane);
+}
+
+Result<EyeInHandPlaneMapping> loadEyeInHandCalibration(const std::string& intrinsicsPath, const std::string& handEyePath,
+                                                       const std::string& planePath, const CellCalibrationLimits& limits) {
+  auto files = readCalibrationFiles(intrinsicsPath, handEyePath, planePath, limits);
+  if (!files) return std::unexpected(files.error());
+  if (files->handEye.config != HandEyeConfig::EyeInHand)
+    return fail(Status::NotCalibrated, fmt::format("{}: configuration eye-to-hand: a fixed camera, not one on the flange",
+                                                   handEyePath));
+  // Whether the plane is in front of the camera depends on each snapshot: pixelToRobot has
+  // no answer for a ray that misses it.
+  return EyeInHandPlaneMapping(files->camera, files->handEye.x, files->plane);
 }
 
 }  // namespace vgr::vision::calib

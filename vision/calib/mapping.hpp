@@ -54,6 +54,28 @@ class CameraPlaneMapping {
   WorkPlane plane_;
 };
 
+// Eye-in-hand (the camera on the robot flange): intrinsics, X = T_flange_cam (handeye.yaml,
+// eye-in-hand) and the work plane, fixed in the base frame. A snapshot taken with the flange
+// at T_base_flange maps exactly like a fixed camera at T_base_cam = T_base_flange * X.
+class EyeInHandPlaneMapping {
+ public:
+  EyeInHandPlaneMapping(const CameraIntrinsics& camera, const Pose& flangeFromCamera, const WorkPlane& plane);
+
+  // CameraPlaneMapping::pixelToRobot of the snapshot taken at baseFromFlange.
+  std::optional<Vec3> pixelToRobot(PixelPoint p, double heightMm, const Pose& baseFromFlange) const;
+  // T_base_cam of that snapshot.
+  Pose baseFromCamera(const Pose& baseFromFlange) const;
+
+  const CameraIntrinsics& camera() const { return camera_; }
+  const Pose& flangeFromCamera() const { return flangeFromCamera_; }
+  const WorkPlane& plane() const { return plane_; }
+
+ private:
+  CameraIntrinsics camera_;
+  Pose flangeFromCamera_;
+  WorkPlane plane_;
+};
+
 }  // namespace vgr::vision::calib
 
 namespace vgr::vision::calib {
@@ -66,12 +88,18 @@ Result<WorkPlane> readWorkPlane(const std::string& path);
 // The calibration a fixed camera's cell maps with: intrinsics.yaml + handeye.yaml
 // (eye-to-hand: X = T_base_cam) + plane.yaml. Errors carry Status::NotCalibrated and name the
 // file and why (missing, malformed, eye-in-hand, residuals above the limits).
+// loadEyeInHandCalibration: the same for a camera on the flange (handeye.yaml eye-in-hand,
+// X = T_flange_cam); pixel_mapping.hpp's loadCalibrationMapping picks by the file.
 struct CellCalibrationLimits {
   double maxReprojPx = 1.0;     // intrinsics RMS and hand-eye reprojection RMS
   double maxHandEyeMm = 2.0;    // hand-eye consistency residual
   double maxHandEyeDeg = 0.2;
+  double maxPointRmsMm = 1.0;   // depth-camera hand-eye: RMS of the target points through A_i, X, Y
 };
 Result<CameraPlaneMapping> loadCellCalibration(const std::string& intrinsicsPath, const std::string& handEyePath,
                                                const std::string& planePath, const CellCalibrationLimits& limits = {});
+Result<EyeInHandPlaneMapping> loadEyeInHandCalibration(const std::string& intrinsicsPath, const std::string& handEyePath,
+                                                       const std::string& planePath,
+                                                       const CellCalibrationLimits& limits = {});
 
 }  // namespace vgr::vision::calib

@@ -2,6 +2,7 @@
 
 #include <fmt/core.h>
 
+#include "vision/calib/handeye.hpp"
 #include "vision/calib/mapping.hpp"
 #include "vision/calib/multi_height.hpp"
 
@@ -47,7 +48,51 @@ class MultiHeightMapping final : public PixelMapping {
   ImageSize size_;
 };
 
+class EyeInHandMapping final : public PixelMapping {
+ public:
+  explicit EyeInHandMapping(const EyeInHandPlaneMapping& m) : mapping_(m) {}
+  std::optional<Vec3> pixelToRobot(PixelPoint, double) const override { return std::nullopt; }
+  std::optional<ImageSize> imageSize() const override {
+    return ImageSize{mapping_.camera().imageSize.width, mapping_.camera().imageSize.height};
+  }
+  std::string describe() const override {
+    return "eye-in-hand calibration files (intrinsics, hand-eye, plane; the flange pose of each snapshot)";
+  }
+  const EyeInHandPlaneMapping* eyeInHand() const override { return &mapping_; }
+
+ private:
+  EyeInHandPlaneMapping mapping_;
+};
+
 }  // namespace
+
+std::optional<Vec3> SnapshotMapping::pixelToRobot(PixelPoint p, double heightMm) const {
+  return mapping_.pixelToRobot(p, heightMm, baseFromFlange_);
+}
+std::optional<ImageSize> SnapshotMapping::imageSize() const {
+  return ImageSize{mapping_.camera().imageSize.width, mapping_.camera().imageSize.height};
+}
+std::string SnapshotMapping::describe() const { return "eye-in-hand snapshot"; }
+
+std::unique_ptr<PixelMapping> eyeInHandMapping(const EyeInHandPlaneMapping& mapping) {
+  return std::make_unique<EyeInHandMapping>(mapping);
+}
+
+Result<std::unique_ptr<PixelMapping>> loadCalibrationMapping(const std::string& intrinsicsPath,
+                                                             const std::string& handEyePath,
+                                                             const std::string& planePath) {
+  // The configuration decides the mapping; any file's problem is reported in the order the
+  // fixed camera's loader checks them (intrinsics, hand-eye, plane).
+  auto he = readHandEye(handEyePath);
+  if (he && he->config == HandEyeConfig::EyeInHand) {
+    auto m = loadEyeInHandCalibration(intrinsicsPath, handEyePath, planePath);
+    if (!m) return std::unexpected(m.error());
+    return eyeInHandMapping(*m);
+  }
+  auto m = loadCellCalibration(intrinsicsPath, handEyePath, planePath);
+  if (!m) return std::unexpected(m.error());
+  return cameraPlaneMapping(*m);
+}
 
 std::unique_ptr<PixelMapping> pinholeMapping(const PinholePlaneModel& model) { return std::make_unique<PinholeMapping>(model); }
 std::unique_ptr<PixelMapping> cameraPlaneMapping(const CameraPlaneMapping& mapping) {

@@ -10,12 +10,13 @@
 #include <Eigen/Core>
 #include <opencv2/core/mat.hpp>
 
+#include "core/depth.hpp"
 #include "core/pose.hpp"
 #include "core/search3d.hpp"
 
 namespace vgr::vision::cloud {
 
-struct DepthIntrinsics;
+using DepthIntrinsics = vgr::DepthIntrinsics;
 
 Eigen::Matrix4d toMatrix(const Pose& p);
 Pose toPose(const Eigen::Matrix4d& t);  // unit quaternion with qw >= 0

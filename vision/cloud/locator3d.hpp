@@ -28,6 +28,7 @@
 
 #include <opencv2/core/mat.hpp>
 
+#include "core/depth.hpp"
 #include "core/pose.hpp"
 #include "core/result.hpp"
 #include "core/search3d.hpp"
@@ -35,12 +36,9 @@
 
 namespace vgr::vision::cloud {
 
-// Pinhole intrinsics of one depth image size.
-struct DepthIntrinsics {
-  int width = 0, height = 0;  // px
-  double fx = 0, fy = 0;      // px
-  double cx = 0, cy = 0;      // px
-};
+// Pinhole intrinsics of one depth image size (core/depth.hpp); the locator needs width and
+// height stated and equal to the depth image's.
+using DepthIntrinsics = vgr::DepthIntrinsics;
 
 enum class Outcome3d { Found, NotFound, RetryFromNewViewpoint };
 // "found", "not_found", "retry_new_viewpoint"
