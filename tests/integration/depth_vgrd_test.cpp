@@ -72,7 +72,14 @@ TEST_F(depth_vgrd, a_camera_in_an_unknown_unit_is_refused_and_vgrd_answers_camer
     EXPECT_EQ(urStatus(*reply), -4) << *reply;
   }
   EXPECT_TRUE(vgrd_->running());
-  const std::string l = log("vgrd.log");
+  // The camera worker logs why it refuses the camera when its connect attempt ends, which
+  // may be after the two cycles above were answered (they do not wait for the camera): wait
+  // for the line (up to 10 s) rather than read the log once (failed so under load).
+  std::string l = log("vgrd.log");
+  for (int i = 0; i < 100 && l.find("Scan3dDistanceUnit is 'Pixel'") == std::string::npos; ++i) {
+    std::this_thread::sleep_for(100ms);
+    l = log("vgrd.log");
+  }
   EXPECT_NE(l.find("Scan3dDistanceUnit is 'Pixel'"), std::string::npos) << l;
 }
 
