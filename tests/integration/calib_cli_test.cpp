@@ -75,6 +75,8 @@ TEST_F(calib_cli, intrinsics_then_handeye_on_rendered_sets) {
   const auto h = nlohmann::json::parse(lastLine(r.out));
   EXPECT_EQ(h["configuration"], "eye-to-hand");  // found by auto
   EXPECT_EQ(h["methods"].size(), 10u);
+  for (const auto& m : h["methods"])  // the shared method table (printHandEyeMethods): fit column and truth error
+    EXPECT_TRUE(m.contains("reproj_px") && m.contains("err_x_mm") && m.contains("err_x_deg")) << m.dump();
   auto heFile = vgr::vision::calib::readHandEye(he + "/handeye.yaml");
   auto truth = vgr::vision::calib::readHandEye(he + "/truth.yaml");
   ASSERT_TRUE(heFile && truth);

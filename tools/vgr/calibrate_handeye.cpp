@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <optional>
+#include <string_view>
 #include <vector>
 
 #include <CLI/CLI.hpp>
@@ -89,32 +90,11 @@ int runCalibrateHandEye(const CalibHandEyeOptions& o) {
                                              fmt::format("--configuration '{}': expected eye-in-hand, eye-to-hand or auto",
                                                          o.configuration)));
   if (!r) return bad(r.error().message);
-  std::optional<calib::HandEyeFile> truth;
-  if (!o.truth.empty()) {
-    auto t = calib::readHandEye(o.truth);
-    if (!t) return bad(t.error().message);
-    truth = *t;
-  }
+  auto truth = readHandEyeTruth(o.truth);
+  if (!truth) return bad(truth.error().message);
   for (const auto& w : r->warnings) std::printf("warning: %s\n", w.c_str());
   std::printf("hand-eye %s, %zu views\n", calib::handEyeConfigName(r->config), views.size());
-  std::printf("  %-13s %-5s %11s %11s %10s%s\n", "method", "ok", "resid_mm", "resid_deg", "reproj_px",
-              truth ? "   err_X_mm  err_X_deg" : "");
-  nlohmann::json methods = nlohmann::json::array();
-  for (const auto& m : r->methods) {
-    std::string tr;
-    double emm = -1, edeg = -1;
-    if (truth && m.x.qw * m.x.qw + m.x.qx * m.x.qx + m.x.qy * m.x.qy + m.x.qz * m.x.qz > 0.5) {
-      const se3::Iso d = se3::toIso(truth->x).inverse() * se3::toIso(m.x);
-      emm = d.translation().norm();
-      edeg = se3::rotationAngleDeg(d.linear());
-      tr = fmt::format(" {:10.3f} {:10.4f}", emm, edeg);
-    }
-    std::printf("  %-13s %-5s %11.3f %11.4f %10.3f%s%s\n", m.method.c_str(), m.valid ? "yes" : "NO", m.transResidMm,
-                m.rotResidDeg, m.reprojRmsPx, tr.c_str(), m.valid ? "" : ("  " + m.note).c_str());
-    methods.push_back({{"method", m.method}, {"valid", m.valid}, {"resid_mm", m.transResidMm},
-                       {"resid_deg", m.rotResidDeg}, {"reproj_px", m.reprojRmsPx}, {"note", m.note}});
-    if (truth) methods.back()["err_x_mm"] = emm, methods.back()["err_x_deg"] = edeg;
-  }
+  nlohmann::json methods = printHandEyeMethods(*r, *truth, "reproj_px");
   std::printf("chosen: %s\n", r->reason.c_str());
   {
     // The limits vgrd loads a hand-eye file with: a result beyond them would only make every
@@ -163,6 +143,38 @@ CLI::App* CalibrateHandEyeCommand::add(CLI::App& parent) {
   calHeCmd->add_option("--truth", calHe.truth, "truth.yaml of a synthetic set: print each method's error");
   calHeCmd->add_flag("--json", calHe.json, "end with one JSON line");
   return calHeCmd;
+}
+
+Result<std::optional<calib::HandEyeFile>> readHandEyeTruth(const std::string& path) {
+  if (path.empty()) return std::optional<calib::HandEyeFile>{};
+  auto t = calib::readHandEye(path);
+  if (!t) return std::unexpected(t.error());
+  return std::optional<calib::HandEyeFile>{*t};
+}
+
+nlohmann::json printHandEyeMethods(const calib::HandEyeResult& r, const std::optional<calib::HandEyeFile>& truth,
+                                   const char* fitName) {
+  const bool point = std::string_view(fitName) == "point_mm";
+  std::printf("  %-15s %-5s %11s %11s %10s%s\n", "method", "ok", "resid_mm", "resid_deg", fitName,
+              truth ? "   err_X_mm  err_X_deg" : "");
+  nlohmann::json methods = nlohmann::json::array();
+  for (const auto& m : r.methods) {
+    std::string tr;
+    double emm = -1, edeg = -1;
+    if (truth && m.x.qw * m.x.qw + m.x.qx * m.x.qx + m.x.qy * m.x.qy + m.x.qz * m.x.qz > 0.5) {
+      const se3::Iso d = se3::toIso(truth->x).inverse() * se3::toIso(m.x);
+      emm = d.translation().norm();
+      edeg = se3::rotationAngleDeg(d.linear());
+      tr = fmt::format(" {:10.3f} {:10.4f}", emm, edeg);
+    }
+    const double fit = point ? m.pointRmsMm : m.reprojRmsPx;
+    std::printf("  %-15s %-5s %11.3f %11.4f %10.3f%s%s\n", m.method.c_str(), m.valid ? "yes" : "NO", m.transResidMm,
+                m.rotResidDeg, fit, tr.c_str(), m.valid ? "" : ("  " + m.note).c_str());
+    methods.push_back({{"method", m.method}, {"valid", m.valid}, {"resid_mm", m.transResidMm},
+                       {"resid_deg", m.rotResidDeg}, {fitName, fit}, {"note", m.note}});
+    if (truth) methods.back()["err_x_mm"] = emm, methods.back()["err_x_deg"] = edeg;
+  }
+  return methods;
 }
 
 }  // namespace vgr::tools

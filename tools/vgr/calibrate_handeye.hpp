@@ -5,10 +5,14 @@
 // Returns the process exit code: 0 ok, 2 bad input (message on stderr naming file / view / key).
 #pragma once
 
+#include <optional>
 #include <string>
+
+#include <nlohmann/json_fwd.hpp>
 
 #include "tools/vgr/calibrate_common.hpp"
 #include "tools/vgr/subcommand.hpp"
+#include "vision/calib/handeye.hpp"
 
 namespace vgr::tools {
 
@@ -27,6 +31,14 @@ struct CalibHandEyeOptions {
 
 int runCalibrateHandEye(const CalibHandEyeOptions& o);
 int runCalibrateHandEyeCloud(const CalibHandEyeOptions& o);  // calibrate_handeye_cloud.cpp
+
+// What both modes print and report (calibrate_handeye.cpp): the truth file of --truth
+// (nullopt without one), and the per-method table on stdout with each method's residuals,
+// its fit (`fitName`: "reproj_px" for the plate, "point_mm" for the sphere target) and,
+// with a truth, its error from it; returns the same rows as JSON for --json.
+Result<std::optional<vision::calib::HandEyeFile>> readHandEyeTruth(const std::string& path);
+nlohmann::json printHandEyeMethods(const vision::calib::HandEyeResult& r,
+                                   const std::optional<vision::calib::HandEyeFile>& truth, const char* fitName);
 
 class CalibrateHandEyeCommand final : public OptionsSubcommand<CalibHandEyeOptions, runCalibrateHandEye> {
  public:

@@ -81,32 +81,11 @@ int runCalibrateHandEyeCloud(const CalibHandEyeOptions& o) {
                                                                                "eye-to-hand or auto",
                                                                                o.configuration)));
   if (!r) return bad(r.error().message);
-  std::optional<calib::HandEyeFile> truth;
-  if (!o.truth.empty()) {
-    auto t = calib::readHandEye(o.truth);
-    if (!t) return bad(t.error().message);
-    truth = *t;
-  }
+  auto truth = readHandEyeTruth(o.truth);
+  if (!truth) return bad(truth.error().message);
   for (const auto& w : r->warnings) std::printf("warning: %s\n", w.c_str());
   std::printf("hand-eye %s (depth camera, sphere target), %zu views\n", calib::handEyeConfigName(r->config), views.size());
-  std::printf("  %-15s %-5s %11s %11s %10s%s\n", "method", "ok", "resid_mm", "resid_deg", "point_mm",
-              truth ? "   err_X_mm  err_X_deg" : "");
-  nlohmann::json methods = nlohmann::json::array();
-  for (const auto& m : r->methods) {
-    std::string tr;
-    double emm = -1, edeg = -1;
-    if (truth && m.x.qw * m.x.qw + m.x.qx * m.x.qx + m.x.qy * m.x.qy + m.x.qz * m.x.qz > 0.5) {
-      const se3::Iso d = se3::toIso(truth->x).inverse() * se3::toIso(m.x);
-      emm = d.translation().norm();
-      edeg = se3::rotationAngleDeg(d.linear());
-      tr = fmt::format(" {:10.3f} {:10.4f}", emm, edeg);
-    }
-    std::printf("  %-15s %-5s %11.3f %11.4f %10.3f%s%s\n", m.method.c_str(), m.valid ? "yes" : "NO", m.transResidMm,
-                m.rotResidDeg, m.pointRmsMm, tr.c_str(), m.valid ? "" : ("  " + m.note).c_str());
-    methods.push_back({{"method", m.method}, {"valid", m.valid}, {"resid_mm", m.transResidMm},
-                       {"resid_deg", m.rotResidDeg}, {"point_mm", m.pointRmsMm}, {"note", m.note}});
-    if (truth) methods.back()["err_x_mm"] = emm, methods.back()["err_x_deg"] = edeg;
-  }
+  nlohmann::json methods = printHandEyeMethods(*r, *truth, "point_mm");
   std::printf("chosen: %s\n", r->reason.c_str());
   {
     const calib::CellCalibrationLimits limits;
