@@ -75,6 +75,14 @@ TEST_F(calib_files, each_bad_file_is_named_with_the_reason) {
   ASSERT_FALSE(m);
   EXPECT_NE(m.error().message.find("plane_bad.yaml: keys 'point_mm' and 'normal'"), std::string::npos) << m.error().message;
 
+  // Text that is no map of keys (fuzz_calib_files: OpenCV's parser looped without end on
+  // it; it must be refused before OpenCV sees it, fast, with the reason).
+  write("plane_not_a_map.yaml", "%YAML:1.0\n  -ion^ ]/\n. ]\n  -ion^ ]/\n");
+  m = calib::loadCellCalibration(path("intrinsics.yaml"), path("handeye.yaml"), path("plane_not_a_map.yaml"));
+  ASSERT_FALSE(m);
+  EXPECT_EQ(m.error().code, Status::NotCalibrated);
+  EXPECT_NE(m.error().message.find("top level is not a map"), std::string::npos) << m.error().message;
+
   // Residuals the hand-eye file was accepted with, above the limits: inconsistent.
   calib::HandEyeResult worse = handEye_;
   worse.methods[static_cast<std::size_t>(worse.best)].transResidMm = 5.0;

@@ -15,6 +15,7 @@
 
 #include <opencv2/core/mat.hpp>
 #include <opencv2/core/persistence.hpp>
+#include <yaml-cpp/yaml.h>
 
 namespace vgr::vision::calib {
 
@@ -36,8 +37,9 @@ inline bool readSmallMatrix(const cv::FileNode& node, int rows, int cols, cv::Ma
 }
 
 // Throws std::runtime_error unless the file looks like what vgr writes: it begins with
-// "%YAML", it is text (no control bytes but tab, CR, LF) and no line after the header starts
-// with "--" other than the "---" document marker. cv::FileStorage picks its parser by the
+// "%YAML", it is text (no control bytes but tab, CR, LF), no line after the header starts
+// with "--" other than the "---" document marker, and the rest is well-formed YAML with a
+// map at its top (checked with yaml-cpp). cv::FileStorage picks its parser by the
 // content, and OpenCV 4.6's parsers fail badly on damaged text (found by fuzz_calib_files):
 // the XML parser dereferences null on a truncated "<?xml", the YAML parser loops without end
 // on a run of dashes after the header. Such a file never reaches OpenCV now. Call inside the
@@ -57,6 +59,19 @@ inline void requireYamlText(const std::string& path) {
     if (text.compare(i + 1, 2, "--") == 0 && text.compare(i + 1, 4, "---\n") != 0 && text.compare(i + 1, 5, "---\r\n") != 0)
       throw std::runtime_error("line " + std::to_string(line) + ": a line of dashes that is not the '---' marker");
   }
+  // What follows the %YAML line must be well-formed YAML whose top level is a map, as
+  // yaml-cpp (a parser fuzzed upstream) reads it. OpenCV's own parser loops without end on
+  // some damaged text that is no map at all (fuzz_calib_files, 2026-12-05: "  -ion^ ]/"
+  // lines, a timeout in readMultiHeight); such text never reaches it now. ("%YAML:1.0" is
+  // OpenCV's form of the directive, which yaml-cpp does not take: the line is skipped.)
+  const std::size_t nl = text.find('\n');
+  YAML::Node root;
+  try {
+    root = YAML::Load(nl == std::string::npos ? std::string() : text.substr(nl + 1));
+  } catch (const YAML::Exception& e) {
+    throw std::runtime_error("line " + std::to_string(e.mark.line + 2) + ": not well-formed YAML: " + e.msg);
+  }
+  if (!root.IsMap()) throw std::runtime_error("not a calibration file: its top level is not a map of keys");
 }
 
 }  // namespace vgr::vision::calib
