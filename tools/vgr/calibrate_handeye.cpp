@@ -109,24 +109,7 @@ int runCalibrateHandEye(const CalibHandEyeOptions& o) {
                                      limits.maxHandEyeMm, limits.maxHandEyeDeg),
                          "Hint: check --square (the printed square's size in mm, measured on the plate), --cols/--rows (inner corners), --intrinsics (the same camera at the same resolution) and the poses' units and --pose-format");
   }
-  if (auto w = calib::writeHandEye(o.out, *r); !w) return bad(w.error().message);
-  std::printf("written: %s\n", o.out.c_str());
-  if (o.json) {
-    const auto& b = r->bestResult();
-    const Vec3 rv = toRotationVector(b.x);
-    nlohmann::json j{{"configuration", calib::handEyeConfigName(r->config)},
-                     {"method", b.method},
-                     {"x_mm", {b.x.x, b.x.y, b.x.z}},
-                     {"x_rotvec_rad", {rv.x, rv.y, rv.z}},
-                     {"resid_mm", b.transResidMm},
-                     {"resid_deg", b.rotResidDeg},
-                     {"reproj_px", b.reprojRmsPx},
-                     {"views_used", views.size()},
-                     {"methods", methods},
-                     {"out", o.out}};
-    std::printf("%s\n", j.dump().c_str());
-  }
-  return 0;
+  return writeHandEyeAndReport(o, *r, "reproj_px", views.size(), methods);
 }
 
 CLI::App* CalibrateHandEyeCommand::add(CLI::App& parent) {
@@ -175,6 +158,29 @@ nlohmann::json printHandEyeMethods(const calib::HandEyeResult& r, const std::opt
     if (truth) methods.back()["err_x_mm"] = emm, methods.back()["err_x_deg"] = edeg;
   }
   return methods;
+}
+
+int writeHandEyeAndReport(const CalibHandEyeOptions& o, const calib::HandEyeResult& r, const char* fitName,
+                          std::size_t viewsUsed, const nlohmann::json& methods) {
+  if (auto w = calib::writeHandEye(o.out, r); !w) return bad(w.error().message);
+  std::printf("written: %s\n", o.out.c_str());
+  if (o.json) {
+    const auto& b = r.bestResult();
+    const Vec3 rv = toRotationVector(b.x);
+    const double fit = std::string_view(fitName) == "point_mm" ? b.pointRmsMm : b.reprojRmsPx;
+    nlohmann::json j{{"configuration", calib::handEyeConfigName(r.config)},
+                     {"method", b.method},
+                     {"x_mm", {b.x.x, b.x.y, b.x.z}},
+                     {"x_rotvec_rad", {rv.x, rv.y, rv.z}},
+                     {"resid_mm", b.transResidMm},
+                     {"resid_deg", b.rotResidDeg},
+                     {fitName, fit},
+                     {"views_used", viewsUsed},
+                     {"methods", methods},
+                     {"out", o.out}};
+    std::printf("%s\n", j.dump().c_str());
+  }
+  return 0;
 }
 
 }  // namespace vgr::tools

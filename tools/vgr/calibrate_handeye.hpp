@@ -5,6 +5,7 @@
 // Returns the process exit code: 0 ok, 2 bad input (message on stderr naming file / view / key).
 #pragma once
 
+#include <cstddef>
 #include <optional>
 #include <string>
 
@@ -39,6 +40,11 @@ int runCalibrateHandEyeCloud(const CalibHandEyeOptions& o);  // calibrate_handey
 Result<std::optional<vision::calib::HandEyeFile>> readHandEyeTruth(const std::string& path);
 nlohmann::json printHandEyeMethods(const vision::calib::HandEyeResult& r,
                                    const std::optional<vision::calib::HandEyeFile>& truth, const char* fitName);
+// Writes the chosen result to o.out, says so, and with --json prints the summary line
+// (the best method, its residuals and fit `fitName`, views used, the method rows). Returns
+// the exit code: 0, or 2 when the file cannot be written.
+int writeHandEyeAndReport(const CalibHandEyeOptions& o, const vision::calib::HandEyeResult& r, const char* fitName,
+                          std::size_t viewsUsed, const nlohmann::json& methods);
 
 class CalibrateHandEyeCommand final : public OptionsSubcommand<CalibHandEyeOptions, runCalibrateHandEye> {
  public:

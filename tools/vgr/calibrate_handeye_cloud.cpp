@@ -99,24 +99,7 @@ int runCalibrateHandEyeCloud(const CalibHandEyeOptions& o) {
                          "Hint: check target.yaml (the sphere radius and centres, in mm, as built), camera.yaml's "
                          "depth_scale_mm and the poses' units and format");
   }
-  if (auto w = calib::writeHandEye(o.out, *r); !w) return bad(w.error().message);
-  std::printf("written: %s\n", o.out.c_str());
-  if (o.json) {
-    const auto& b = r->bestResult();
-    const Vec3 rv = toRotationVector(b.x);
-    nlohmann::json j{{"configuration", calib::handEyeConfigName(r->config)},
-                     {"method", b.method},
-                     {"x_mm", {b.x.x, b.x.y, b.x.z}},
-                     {"x_rotvec_rad", {rv.x, rv.y, rv.z}},
-                     {"resid_mm", b.transResidMm},
-                     {"resid_deg", b.rotResidDeg},
-                     {"point_mm", b.pointRmsMm},
-                     {"views_used", views.size()},
-                     {"methods", methods},
-                     {"out", o.out}};
-    std::printf("%s\n", j.dump().c_str());
-  }
-  return 0;
+  return writeHandEyeAndReport(o, *r, "point_mm", views.size(), methods);
 }
 
 }  // namespace vgr::tools
