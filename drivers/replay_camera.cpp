@@ -106,13 +106,7 @@ class ReplayCamera final : public Camera {
     const size_t rowBytes = static_cast<size_t>(img.cols) * img.elemSize();
     out.data.resize(rowBytes * img.rows);
     for (int y = 0; y < img.rows; ++y) std::memcpy(out.data.data() + y * rowBytes, img.ptr(y), rowBytes);
-    ++next_;
-    out.frameId = next_;
-    out.deviceTimestampNs = 0;
-    out.hostTimestampNs = wallNs();
-    lastStatus_ = FrameStatus::Ok;
-    stats_.completed++;
-    return {};
+    return served(out);
   }
 
  private:
@@ -146,6 +140,11 @@ class ReplayCamera final : public Camera {
     out.data.resize(static_cast<std::size_t>(img.cols) * img.rows * sizeof(float));
     cv::Mat z(img.rows, img.cols, CV_32FC1, out.data.data());
     img.convertTo(z, CV_32F, camera_.depthScaleMm);  // 0 stays 0: no data
+    return served(out);
+  }
+
+  // A frame handed out: its id and time, and the counters.
+  Result<void> served(Frame& out) {
     ++next_;
     out.frameId = next_;
     out.deviceTimestampNs = 0;
