@@ -292,8 +292,12 @@ CycleResult CycleRunner::runCycle3d(const Trigger& t, PreparedJob& job, CycleRes
              : !r.rejected.empty()                                    ? Status::OffsetOutOfLimits
              : found->outcome == Outcome3d::RetryFromNewViewpoint     ? Status::RetryNewViewpoint
                                                                       : Status::NoPartFound;
+  // Why a 3D cycle found nothing (one line per such cycle, as vgrd logs every status but OK;
+  // a 3D cycle takes seconds, so this is no hot-path logging).
   if (r.status == Status::RetryNewViewpoint || r.status == Status::NoPartFound)
-    log::debug("cycle", "cycle {}: {} ({})", t.cycleId, vision::cloud::outcomeName(found->outcome), found->reason);
+    log::info("cycle", "cycle {}: job {}: {} ({}; {} scene points, {} candidates, best other fitness {:.2f})", t.cycleId,
+              t.jobId, vision::cloud::outcomeName(found->outcome), found->reason, found->scenePoints, found->candidates,
+              found->bestOtherFitness);
   r.totalMs = msSince(t.at);
   if (Clock::now() > deadline)
     return end(Status::ProcessingTimeout, fmt::format("finished after its {} ms deadline", cell_.cycleDeadlineMs));

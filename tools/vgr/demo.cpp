@@ -455,6 +455,7 @@ int runDemo(const DemoOptions& o) {
     truth3d = std::move(*t);
   }
   int ok = 0, plcLabelErrors = 0;
+  std::map<std::string, int> statuses;  // the PLC's ERROR_CODE per cycle
   double maxPos = 0, maxAng = 0;
   std::vector<double> latencies;
   for (const auto& p : plcLines) {
@@ -464,6 +465,7 @@ int runDemo(const DemoOptions& o) {
       continue;
     }
     const int status = p["status"].get<int>();
+    ++statuses[std::to_string(status)];
     const double latency = p.value("latency_ms", 0.0);
     latencies.push_back(latency);
     const auto rid = p.value("result_id", 0u);
@@ -600,7 +602,10 @@ int runDemo(const DemoOptions& o) {
   }
   // The 3D cell's bounds (issue 14): every pose within 1 mm and 1 deg of the truth.
   const bool withinBounds = !threeD || (maxPos <= kDemo3dMaxPosErrMm && maxAng <= kDemo3dMaxRotErrDeg);
-  if (threeD) summary["within_bounds"] = withinBounds;
+  if (threeD) {
+    summary["within_bounds"] = withinBounds;
+    summary["statuses"] = statuses;  // 3D: what the cycles without a pose ended with
+  }
   std::printf("%s\n", summary.dump().c_str());
   std::fflush(stdout);
   return (lost == 0 && robotsOk && sortingOk && withinBounds) ? 0 : 1;
