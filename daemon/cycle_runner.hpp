@@ -70,7 +70,8 @@ class CycleRunner {
   ~CycleRunner();
 
   // Start-up, before start(): builds every job's locator (a folder: job.yaml, template,
-  // vision::makeLocator; no folder: the untaught moments locator) and warms it up once.
+  // vision::makeLocator; no folder: the untaught moments locator) and warms it up once; a 3D
+  // job's Locator3d (makeJobLocator3d: its model's features, no warm-up image).
   // Errors name the job folder's file and what is wrong.
   Result<void> prepareJobs();
   void start();

@@ -157,6 +157,13 @@ Result<DepthScene> renderDepthScene(const DepthSceneOptions& o, std::uint64_t in
   const Eigen::Vector3d tiltAxis(horizontalAxis(rng));
   const double camTilt = o.cameraTiltMaxDeg * kDeg * u01(rng);
   camFromBin = Iso(Eigen::AngleAxisd(camTilt, tiltAxis)) * camFromBin;
+  {
+    // options.view: the same scene from the camera moved to T_cam_view.
+    Iso camFromView = Iso::Identity();
+    camFromView.linear() = Eigen::Quaterniond(o.view.qw, o.view.qx, o.view.qy, o.view.qz).normalized().toRotationMatrix();
+    camFromView.translation() = V3(o.view.x, o.view.y, o.view.z);
+    camFromBin = camFromView.inverse() * camFromBin;
+  }
 
   // The bin: 380 x 280 mm floor, 8 mm walls 100 mm high, standing on a wider table.
   const double hx = o.bin ? 190 : 300, hy = o.bin ? 140 : 220;

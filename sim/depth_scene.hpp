@@ -43,6 +43,10 @@ struct DepthSceneOptions {
   // Every part rests on this stable face ("-z": its natural one, as depth_parts.hpp names
   // them); "" = any stable face, drawn per part.
   std::string face;
+  // Another viewpoint of the same scene (eye-in-hand snapshots): the camera moved to T_cam_view
+  // in the frame of the camera the scene is drawn for; the scene itself does not change.
+  // Identity: that camera. Truth is given in the moved camera's frame.
+  Pose view;
   std::uint64_t seed = 1;
 };
 

@@ -11,6 +11,7 @@
 //  - Eye-in-hand: the flange pose sent with TRIG moves the 3D result exactly as the robot moved.
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -23,6 +24,10 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <opencv2/imgcodecs.hpp>
+
+#include "config/depth_dataset.hpp"
+#include "sim/depth_scene.hpp"
 #include "tests/support/command.hpp"
 #include "tests/support/handeye_file.hpp"
 #include "tests/support/raw_tcp_client.hpp"
@@ -260,6 +265,90 @@ TEST_F(depth_vgrd, eye_in_hand_the_pose_sent_moves_the_result_exactly_as_the_rob
   ASSERT_FALSE(none.is_null());
   EXPECT_EQ(none["status"].get<int>(), -2);
   EXPECT_TRUE(vgrd_->running());
+}
+
+}  // namespace
+
+namespace {
+
+// Eye-in-hand 3D, two snapshot poses of one scene (issue 14): the depth camera on the flange
+// sees the same part from flange poses A and B (two renders of one scene, the camera moved by
+// V = T_camA_camB; B = A X V X^-1). The replay camera serves them in order (frame 1 = A's
+// image, frame 2 = B's), each TRIG carries its flange pose; both results are the part's true
+// pose in the base frame, A X T_camA_grasp, within the cell's bounds (1 mm, 1 deg).
+TEST_F(depth_vgrd, eye_in_hand_two_snapshot_poses_of_one_scene_give_the_same_part) {
+  ASSERT_NO_FATAL_FAILURE(prepare3dCell(1, vgr::tools::Demo3dScenes{}, 1));
+  const vgr::Pose flangeFromCam = vgr::poseFromEulerZyxDeg(20, -10, 100, vgr::EulerZyxDeg{30, 0, 0});
+  ASSERT_TRUE(vgr::test::writeTruthHandEye((dir_ / "sim-calib-3d/handeye.yaml").string(),
+                                           vgr::vision::calib::HandEyeConfig::EyeInHand, flangeFromCam));
+  // Scene 0 of the demo's scenes (seed 1), from the camera as rendered and moved by V.
+  const vgr::Pose camAFromCamB = vgr::poseFromEulerZyxDeg(30, -20, 10, vgr::EulerZyxDeg{6, 0, 3});
+  vgr::sim::DepthSceneOptions o;
+  const vgr::tools::Demo3dScenes choice;
+  o.part = choice.part;
+  o.clutter = choice.clutter;
+  o.tiltMaxDeg = choice.tiltMaxDeg;
+  o.cameraTiltMaxDeg = choice.cameraTiltMaxDeg;
+  o.bin = choice.bin;
+  o.seed = 1;
+  fs::create_directories(dir_ / "views" / "images");
+  fs::copy_file(dir_ / "scenes" / "camera.yaml", dir_ / "views" / "camera.yaml");
+  std::vector<vgr::config::DepthTruthRow> rows;
+  for (int i = 0; i < 2; ++i) {
+    o.view = i == 0 ? vgr::Pose{} : camAFromCamB;
+    auto scene = vgr::sim::renderDepthScene(o, 0);
+    ASSERT_TRUE(scene) << scene.error().message;
+    ASSERT_EQ(scene->parts.size(), 1u);
+    const std::string name = fmt::format("images/{:04d}.png", i);
+    ASSERT_TRUE(cv::imwrite((dir_ / "views" / name).string(), scene->depth));
+    rows.push_back({name, true, scene->parts[0].pose, 0});
+  }
+  ASSERT_TRUE(vgr::config::writeDepthTruth((dir_ / "views" / "truth.csv").string(), rows));
+  // The cell's camera: the replay camera serving the two views in order.
+  std::string yaml = readText(configPath_);
+  const auto a = yaml.find("camera:\n"), b = yaml.find("\n# A depth camera sends");
+  ASSERT_TRUE(a != std::string::npos && b != std::string::npos);
+  yaml.replace(a, b - a,
+               "camera:\n  name: depth0\n  driver: replay\n  pixel_format: Coord3D_C16\n  replay: {folder: " +
+                   (dir_ / "views").string() + ", loop: true}\n  trigger: {mode: software}\n");
+  std::ofstream(configPath_) << yaml;
+  notify_ = std::make_unique<vgr::test::NotifySocket>((dir_ / "notify.sock").string());
+  auto p = vgr::test::spawnWithNotify({bin("vgrd"), "--config", configPath_, "--journal", journalPath()},
+                                      (dir_ / "vgrd.log").string(), *notify_);
+  ASSERT_TRUE(p.has_value());
+  vgrd_ = std::make_unique<vgr::test::ChildProcess>(std::move(*p));
+  ASSERT_TRUE(waitNotify("READY=1", std::chrono::milliseconds(90000))) << log("vgrd.log");
+
+  const vgr::Pose flangeA = vgr::poseFromEulerZyxDeg(400, 50, 900, vgr::EulerZyxDeg{0, 0, 180});
+  const vgr::Pose flangeB =
+      vgr::compose(vgr::compose(vgr::compose(flangeA, flangeFromCam), camAFromCamB), vgr::inverse(flangeFromCam));
+  const vgr::Pose truth = vgr::compose(vgr::compose(flangeA, flangeFromCam), rows[0].pose);  // grasp = model frame
+  auto abbPose = [](const vgr::Pose& f) {  // RAPID ValToStr of a pose
+    return fmt::format("[[{:.4f},{:.4f},{:.4f}],[{:.7f},{:.7f},{:.7f},{:.7f}]]", f.x, f.y, f.z, f.qw, f.qx, f.qy, f.qz);
+  };
+  vgr::test::RawTcpClient abb(kAbbPort);
+  for (const auto& [flange, frame] : {std::pair{flangeA, 1}, std::pair{flangeB, 2}}) {
+    ASSERT_TRUE(abb.send("TRIG,1," + abbPose(flange) + "#"));
+    const auto reply = abb.readOnce(80, 40000ms);
+    ASSERT_TRUE(reply) << log("vgrd.log");
+    const auto cycle = std::stoul(reply->substr(reply->find(',') + 1));
+    const auto j = journalEntry(static_cast<std::uint32_t>(cycle));
+    ASSERT_FALSE(j.is_null()) << *reply;
+    EXPECT_EQ(j["frame_id"].get<std::uint64_t>(), static_cast<std::uint64_t>(frame)) << j.dump();
+    ASSERT_EQ(j["status"].get<int>(), 0) << j.dump() << log("vgrd.log");
+    const auto& part = j["parts"][0];
+    const vgr::Pose got = vgr::poseFromEulerZyxDeg(part["x_mm"].get<double>(), part["y_mm"].get<double>(),
+                                                   part["z_mm"].get<double>(),
+                                                   vgr::EulerZyxDeg{part["rz_deg"].get<double>(), part["ry_deg"].get<double>(),
+                                                                    part["rx_deg"].get<double>()});
+    const double d = std::sqrt((got.x - truth.x) * (got.x - truth.x) + (got.y - truth.y) * (got.y - truth.y) +
+                               (got.z - truth.z) * (got.z - truth.z));
+    const vgr::Pose diff = vgr::compose(vgr::inverse(truth), got);
+    const double angleDeg = 2.0 * std::acos(std::min(1.0, std::abs(diff.qw))) * 180.0 / M_PI;
+    std::printf("snapshot %d: %.3f mm, %.3f deg from the truth\n", frame, d, angleDeg);
+    EXPECT_LE(d, 1.0) << "snapshot " << frame << ": " << j.dump();
+    EXPECT_LE(angleDeg, 1.0) << "snapshot " << frame << ": " << j.dump();
+  }
 }
 
 }  // namespace
