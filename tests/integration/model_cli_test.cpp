@@ -3,7 +3,10 @@
 // a 3D job whose report names that view and its edges, whose model lies within 0.3 mm of
 // the true mesh, and which finds the part in the data set's scene without a false pose.
 // Bad input: exit code 2, one line naming the file, nothing written.
+#include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -53,6 +56,31 @@ TEST_F(model_cli, BuildFromViewsWithABadRobotPoseThenEvalAndLocate) {
   const auto e = nlohmann::json::parse(lastLine(r.out));
   EXPECT_EQ(e["false_positives"], 0) << e.dump();
   EXPECT_EQ(e["success_rate"].get<double>(), 1.0) << e.dump();
+
+  // vgr locate on a 3D job: the same scene, the pose within 2 mm of the truth (truth.csv's
+  // row: image,x_mm,y_mm,z_mm,...), the camera found next to the image's folder.
+  r = vgr("locate --job " + path("job") + " --image " + path("set/images/0000.png") + " --json");
+  ASSERT_EQ(r.exitCode, 0) << r.out;
+  const auto l = nlohmann::json::parse(lastLine(r.out));
+  EXPECT_EQ(l["outcome"], "found") << l.dump();
+  ASSERT_EQ(l["parts"].size(), 1u) << l.dump();
+  std::ifstream truth(path("set/truth.csv"));
+  std::string header, row;
+  std::getline(truth, header);
+  std::getline(truth, row);
+  std::stringstream fields(row);
+  std::string image, x, y, z;
+  std::getline(fields, image, ',');
+  std::getline(fields, x, ',');
+  std::getline(fields, y, ',');
+  std::getline(fields, z, ',');
+  const auto& pose = l["parts"][0]["pose"];
+  const double dx = pose["x_mm"].get<double>() - std::stod(x), dy = pose["y_mm"].get<double>() - std::stod(y),
+               dz = pose["z_mm"].get<double>() - std::stod(z);
+  EXPECT_LE(std::sqrt(dx * dx + dy * dy + dz * dz), 2.0) << l.dump() << " vs " << row;
+  // 2D-only options on a 3D job are refused.
+  r = vgr("locate --job " + path("job") + " --image " + path("set/images/0000.png") + " --overlay " + path("o.png"));
+  EXPECT_EQ(r.exitCode, 2) << r.out;
 }
 
 TEST_F(model_cli, BadInputWritesNothing) {
