@@ -19,6 +19,8 @@ const std::vector<Search3dKey>& search3dKeys() {
       VGR_KEY("plane_min_share", planeMinShare, 0, 1, false),
       VGR_KEY("feature_radius_mm", featureRadiusMm, 1, 200, false),
       VGR_KEY("model_views", modelViews, 0, 500, true),
+      VGR_KEY("cluster_mm", clusterMm, 0, 100, false),
+      VGR_KEY("feature_neighbours", featureNeighbours, 1, 10, true),
       VGR_KEY("ransac_iterations", ransacIterations, 100, 10000000, true),
       VGR_KEY("ransac_confidence", ransacConfidence, 1e-6, 1, false),
       VGR_KEY("ransac_distance_mm", ransacDistanceMm, 0.5, 100, false),

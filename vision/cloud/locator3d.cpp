@@ -19,6 +19,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
+#include <string_view>
 #include <utility>
 
 #include <Eigen/Eigenvalues>
@@ -28,6 +30,7 @@
 
 #include "vision/cloud/cloud_math.hpp"
 #include "vision/cloud/open3d_backend.hpp"
+#include "vision/cloud/ppf.hpp"
 
 namespace vgr::vision::cloud {
 namespace {
@@ -36,6 +39,20 @@ using backend::PointSet;
 using Points = backend::Points;
 
 constexpr double kModelFineMm = 1.5;     // visibility model spacing
+// Clusters (DBSCAN): a core point has this many neighbours; a cluster with fewer points is
+// not searched (a part shows at least ~80 points at a 3 mm voxel from any side).
+constexpr int kClusterMinPoints = 3;
+constexpr int kClusterMinSize = 20;
+constexpr double kClusterZScale = 0.25;
+constexpr double kSceneNormalRadiusMm = 2.5;
+// PPF (ppf.hpp): F quantised in 12 deg steps and max(voxel, 4 % of the model's diameter)
+// (Drost et al. 2010: 12 deg, 5 %), 30 alpha bins; every 2nd cluster point a reference.
+constexpr double kPpfAngleStepDeg = 12;
+constexpr int kPpfAlphaBins = 30;
+constexpr double kPpfMaxNormalAngleDeg = 150;
+constexpr int kPpfRefStep = 2;
+constexpr double kPpfMaxBucketShare = 1.0;
+constexpr std::size_t kPpfRanked = 12;
 // FPFH neighbours: Open3D's tutorial caps them at 100, which at a 3 mm voxel cuts a 30 mm
 // radius to ~17 mm; 500 keeps the radius (measured: right matches 9 % -> 18 %).
 constexpr int kFpfhMaxNeighbours = 500;
@@ -110,7 +127,9 @@ class Locator3dImpl final : public Locator3d {
         counts.push_back(visibleFrom(modelFine_.points(), modelFine_.normals(), d, kModelFineMm, p.visibleMaxAngleDeg).size());
       minSeen_ = static_cast<int>(std::lround(kMinViewShare * static_cast<double>(*std::min_element(counts.begin(), counts.end()))));
     }
-    if (p.modelViews > 0) {
+    if (p.clusterMm > 0) {
+      // the cluster search needs no FPFH (ppf_ below)
+    } else if (p.modelViews > 0) {
       // FPFH of what each viewpoint sees: the views' points pooled, each remembering which
       // model point it is.
       std::vector<PointSet> views;
@@ -132,6 +151,18 @@ class Locator3dImpl final : public Locator3d {
       featureIndex_ = std::make_unique<backend::FeatureIndex>(pool);
     } else {
       modelDown_.computeFpfh(p.featureRadiusMm, 100);  // paper 004: FPFH of the model
+    }
+    if (p.clusterMm > 0) {
+      double diameter = 0;
+      for (const auto& a : modelDown_.points())
+        for (const auto& b : modelDown_.points()) diameter = std::max(diameter, (a - b).norm());
+      diameter_ = diameter;
+      // The model's exact normals on its voxel grid (not averaged across its edges), as the
+      // scene's come from its full-resolution points (locate()).
+      PointSet exact = full.voxelDown(v);
+      exact.normalsFromNearest(full);
+      ppf_ = std::make_unique<PpfModel>(exact.points(), exact.normals(), std::max(v, 0.04 * diameter), kPpfAngleStepDeg,
+                                        kPpfAlphaBins, kPpfMaxNormalAngleDeg, kPpfMaxBucketShare);
     }
     // Paper 004 Sec. 3.2: "the acquired point cloud was compared with n_R different point
     // clouds, obtained by rotating the reconstructed model by an angle 2 pi / n_R" (about the
@@ -161,24 +192,34 @@ class Locator3dImpl final : public Locator3d {
     Locate3dResult out;
     const double v = params_.voxelMm;
     // The current view P_a in the camera frame, without the table / bin floor.
+    stage("start");
     Points scene = backProject(depth, k, params_.roi);
     claimed_ = cv::Mat::zeros(depth.size(), CV_8UC1);
     if (params_.removePlane) removeDominantPlane(scene, depth, k);
     PointSet all(std::move(scene));
+    stage("back-projection + plane");
     PointSet sceneDown = all.voxelDown(v);
     out.scenePoints = static_cast<int>(sceneDown.size());
     if (sceneDown.size() < 30) {
       out.reason = fmt::format("{} points left after the ROI and plane removal", sceneDown.size());
       return out;
     }
-    sceneDown.estimateNormals(2 * v, 30, Eigen::Vector3d::Zero());  // the camera is at the origin
-    sceneDown.computeFpfh(params_.featureRadiusMm, kFpfhMaxNeighbours);
+    if (ppf_)  // PPF needs normals true to each face: from the sensor's full-resolution points
+      sceneDown.estimateNormalsFrom(all, kSceneNormalRadiusMm, Eigen::Vector3d::Zero());
+    else
+      sceneDown.estimateNormals(2 * v, 30, Eigen::Vector3d::Zero());  // the camera is at the origin
+    if (!ppf_) sceneDown.computeFpfh(params_.featureRadiusMm, kFpfhMaxNeighbours);
     Points remaining = all.points();
 
     // Correspondences: each scene point's nearest model feature (paper 004 Sec. 3.2 step 2).
     std::vector<Eigen::Vector2i> sceneToModel;
     std::unique_ptr<backend::CorrespondenceSampler> sampler;
-    if (featureIndex_) {
+    std::vector<std::vector<std::size_t>> clusters;
+    if (ppf_) {
+      stage("voxel + normals");
+      clusters = sceneClusters(sceneDown);
+      stage("clusters");
+    } else if (featureIndex_) {
       for (const auto& m : featureIndex_->match(sceneDown, {}, 1))
         sceneToModel.emplace_back(m[0], poolOwner_[static_cast<std::size_t>(m[1])]);
       sampler = std::make_unique<backend::CorrespondenceSampler>(sceneDown, sceneToModel, 2 * radius_);
@@ -188,14 +229,18 @@ class Locator3dImpl final : public Locator3d {
     Candidate bestOther;
     while (static_cast<int>(out.parts.size()) < params_.maxParts) {
       Candidate best;
-      for (int c = 0; c < params_.nRotations; ++c) {
-        for (auto& cand : hypotheses(c, sceneDown, sampler.get(), active, depth, k, static_cast<int>(out.parts.size()))) {
-          refineCandidate(cand, remaining, depth, k);
-          ++out.candidates;
-          traceCandidate(cand);
-          if (cand.valid && (!best.valid || better(cand, best))) best = cand;
+      if (ppf_) {
+        best = searchClusters(clusters, sceneDown, active, remaining, depth, k, out.candidates);
+      } else {
+        for (int c = 0; c < params_.nRotations; ++c) {
+          for (auto& cand : hypotheses(c, sceneDown, sampler.get(), active, depth, k, static_cast<int>(out.parts.size()))) {
+            refineCandidate(cand, remaining, depth, k);
+            ++out.candidates;
+            traceCandidate(cand);
+            if (cand.valid && (!best.valid || better(cand, best))) best = cand;
+          }
+          if (best.consistent(params_) && best.vis.fitness >= params_.fHigh) break;  // paper: stop above f_h
         }
-        if (best.consistent(params_) && best.vis.fitness >= params_.fHigh) break;  // paper: stop above f_h
       }
       if (!best.valid) break;
       bool accept = best.consistent(params_) && best.vis.fitness >= params_.fHigh;
@@ -223,6 +268,7 @@ class Locator3dImpl final : public Locator3d {
       removeExplained(best.camFromModel, sceneDown, active, remaining, depth, k);
       if (std::count(active.begin(), active.end(), 1) < 30) break;
     }
+    stage("search");
     std::sort(out.parts.begin(), out.parts.end(), [](const Part3d& a, const Part3d& b) { return a.score > b.score; });
     if (!out.parts.empty()) {
       out.outcome = Outcome3d::Found;
@@ -241,6 +287,146 @@ class Locator3dImpl final : public Locator3d {
   }
 
  private:
+  // VGR_CLOUD_TRACE: CPU ms since the last stage() call, on stderr.
+  static void stage(const char* what) {
+    static const bool on = std::getenv("VGR_CLOUD_TRACE") != nullptr;
+    if (!on) return;
+    static double last = 0;
+    timespec t{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    const double now = t.tv_sec * 1e3 + t.tv_nsec / 1e6;
+    if (what[0] != '-' && std::string_view(what) != "start") std::fprintf(stderr, "  [%s: %.0f ms cpu]\n", what, now - last);
+    last = now;
+  }
+
+  // The scene's Euclidean clusters (DBSCAN, radius clusterMm) after plane removal: after the
+  // bin floor is gone, each part and each clutter object is its own cluster. Returns the
+  // clusters whose extent could be (part of) one part (bounding-box diagonal at most the
+  // model's diameter + 2 clusterMm), each a list of sceneDown indices; biggest first.
+  std::vector<std::vector<std::size_t>> sceneClusters(const PointSet& sceneDown) const {
+    // z compressed: a part's faces at different heights are often separated by the invalid
+    // pixels of its steep walls (measured: the bracket's flange and base plate 24 mm apart
+    // in z fell into separate clusters at 8 and 15 mm); objects side by side are not.
+    Points squashed;
+    for (const auto& p : sceneDown.points()) squashed.emplace_back(p.x(), p.y(), kClusterZScale * p.z());
+    const auto labels = PointSet(std::move(squashed)).clusters(params_.clusterMm, kClusterMinPoints);
+    int n = 0;
+    for (int l : labels) n = std::max(n, l + 1);
+    std::vector<std::vector<std::size_t>> all(static_cast<std::size_t>(n));
+    for (std::size_t i = 0; i < labels.size(); ++i)
+      if (labels[i] >= 0) all[static_cast<std::size_t>(labels[i])].push_back(i);
+    std::vector<std::vector<std::size_t>> out;
+    const auto* truth = traceTruth();
+    std::unique_ptr<backend::NearestIndex> truthIndex;
+    if (truth) {
+      Points placed;
+      for (const auto& p : modelFine_.points()) placed.push_back((*truth * p.homogeneous()).head<3>());
+      truthIndex = std::make_unique<backend::NearestIndex>(placed);
+    }
+    for (auto& c : all) {
+      Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e18), hi = -lo;
+      for (std::size_t i : c) lo = lo.cwiseMin(sceneDown.points()[i]), hi = hi.cwiseMax(sceneDown.points()[i]);
+      const double diag = (hi - lo).norm();
+      // Plausible size: no more points than the whole model at this voxel, and no two points
+      // farther apart than the model's diameter (+ a voxel of noise each side).
+      bool plausible = static_cast<int>(c.size()) >= kClusterMinSize && c.size() <= modelDown_.size();
+      double diameter = 0;
+      for (std::size_t a = 0; plausible && a < c.size(); ++a)
+        for (std::size_t b = a + 1; b < c.size(); ++b)
+          diameter = std::max(diameter, (sceneDown.points()[c[a]] - sceneDown.points()[c[b]]).squaredNorm());
+      diameter = std::sqrt(diameter);
+      plausible = plausible && diameter <= diameter_ + 2 * params_.voxelMm;
+      if (truthIndex) {
+        int onPart = 0;
+        for (std::size_t i : c) onPart += truthIndex->nearest(sceneDown.points()[i]).first <= 9.0;
+        if (onPart > 0 || plausible)
+          std::fprintf(stderr, "  cluster %zu pts diag %.0f (diameter %.0f) mm %s, %d on the true part\n", c.size(), diag, diameter, plausible ? "plausible" : "skipped", onPart);
+      }
+      if (plausible) out.push_back(std::move(c));
+    }
+    std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.size() > b.size(); });
+    return out;
+  }
+
+  // Registers the model against each cluster on its own (paper 004 Sec. 3.2 steps 1-3 per
+  // cluster): FPFH of the cluster's points only (no neighbouring object in the histograms,
+  // as the model's view features have none), k nearest model features per point, RANSAC
+  // with the 2nd and 3rd sample in the same cluster, ICP (eq. 2). The best candidate over
+  // all clusters.
+  Candidate searchClusters(const std::vector<std::vector<std::size_t>>& clusters, const PointSet& sceneDown,
+                           const std::vector<char>& active, const Points& remaining, const cv::Mat& depth, const DepthIntrinsics& k,
+                           int& candidates) {
+    Candidate best;
+    for (std::size_t ci = 0; ci < clusters.size(); ++ci) {
+      std::vector<std::size_t> idx;
+      for (std::size_t i : clusters[ci])
+        if (active[i]) idx.push_back(i);
+      if (static_cast<int>(idx.size()) < kClusterMinSize) continue;
+      const PointSet cl = sceneDown.select(idx);
+      // Hypotheses: each reference point's PPF peak (ppf.hpp), merged when within 10 mm /
+      // 10 deg (their votes added), the kPpfRanked most voted re-ranked by how well the depth
+      // image supports them (quickScore), the best hypothesesPerCopy refined.
+      struct Hyp {
+        Eigen::Matrix4d t;
+        double votes, score;
+      };
+      std::vector<Hyp> hyps;
+      stage("-");
+      const auto votes = ppf_->match(cl.points(), cl.normals(), kPpfRefStep);
+      stage("  ppf");
+      if (const auto* truth = traceTruth()) {
+        int near = 0, maxVotes = 0, maxNear = 0;
+        for (const auto& vote : votes) {
+          maxVotes = std::max(maxVotes, vote.votes);
+          if (translationErrorMm(vote.sceneFromModel, *truth) < 15 && rotationErrorDeg(vote.sceneFromModel, *truth) < 15)
+            ++near, maxNear = std::max(maxNear, vote.votes);
+        }
+        std::fprintf(stderr, " cluster %zu: %zu reference peaks, %d near the truth (most votes %d, near the truth %d)\n", ci, votes.size(), near, maxVotes, maxNear);
+      }
+      for (const auto& vote : votes) {
+        bool merged = false;
+        for (auto& h : hyps)
+          if (translationErrorMm(h.t, vote.sceneFromModel) < 10 && rotationErrorDeg(h.t, vote.sceneFromModel) < 10) {
+            h.votes += vote.votes;
+            merged = true;
+            break;
+          }
+        if (!merged) hyps.push_back({vote.sceneFromModel, static_cast<double>(vote.votes), 0});
+      }
+      std::sort(hyps.begin(), hyps.end(), [](const Hyp& a, const Hyp& b) { return a.votes > b.votes; });
+      if (hyps.size() > kPpfRanked) hyps.resize(kPpfRanked);
+      for (auto& h : hyps) h.score = quickScore(0, h.t, depth, k);
+      std::stable_sort(hyps.begin(), hyps.end(), [](const Hyp& a, const Hyp& b) { return a.score > b.score; });
+      if (const auto* truth = traceTruth()) {
+        int rank = -1;
+        for (std::size_t i = 0; i < hyps.size() && rank < 0; ++i)
+          if (translationErrorMm(hyps[i].t, *truth) < 15 && rotationErrorDeg(hyps[i].t, *truth) < 15) rank = static_cast<int>(i);
+        std::fprintf(stderr, " cluster %zu (%zu pts): %zu hypotheses, first near the truth at rank %d\n", ci, idx.size(), hyps.size(), rank);
+      }
+      for (std::size_t i = 0; i < hyps.size() && static_cast<int>(i) < params_.hypothesesPerCopy; ++i) {
+        Candidate cand;
+        cand.camFromModel = hyps[i].t;
+        refineCandidate(cand, remaining, depth, k);
+        ++candidates;
+        traceCandidate(cand);
+        if (cand.valid && (!best.valid || better(cand, best))) best = cand;
+      }
+      stage("  refine");
+    }
+    return best;
+  }
+
+  // VGR_CLOUD_TRACE with VGR_CLOUD_TRUTH: the true pose of one part, for the trace; else null.
+  static const Eigen::Matrix4d* traceTruth() {
+    if (!std::getenv("VGR_CLOUD_TRACE")) return nullptr;
+    static thread_local Eigen::Matrix4d truth;
+    const char* t = std::getenv("VGR_CLOUD_TRUTH");
+    Pose p;
+    if (!t || std::sscanf(t, "%lf %lf %lf %lf %lf %lf %lf", &p.x, &p.y, &p.z, &p.qw, &p.qx, &p.qy, &p.qz) != 7) return nullptr;
+    truth = toMatrix(p);
+    return &truth;
+  }
+
   // Debugging aid: VGR_CLOUD_TRACE prints every candidate (with its error when
   // VGR_CLOUD_TRUTH holds "x y z qw qx qy qz" of one true part) on stderr.
   static void traceCandidate(const Candidate& c) {
@@ -492,10 +678,12 @@ class Locator3dImpl final : public Locator3d {
   std::vector<int> poolOwner_;  // model-view feature -> modelDown_ point
   std::unique_ptr<backend::FeatureIndex> featureIndex_;
   std::unique_ptr<backend::IcpTarget> icpTarget_;
+  std::unique_ptr<PpfModel> ppf_;  // clusterMm > 0: the hypothesis generator
   std::vector<PointSet> copies_;
   std::vector<Eigen::Matrix4d> copyRotations_;
   Eigen::Vector3d centroid_ = Eigen::Vector3d::Zero();
   double radius_ = 0;
+  double diameter_ = 0;  // of modelDown_, mm
   int minSeen_ = 0;  // kMinViewShare x the median visible model points
   VisibilityCheck visibility_;
   cv::Mat claimed_;  // pixels of the parts found in the current call
