@@ -31,6 +31,7 @@ const std::vector<Search3dKey>& search3dKeys() {
       VGR_KEY("fitness_distance_mm", fitnessDistanceMm, 0.2, 50, false),
       VGR_KEY("max_contradiction", maxContradiction, 0, 1, false),
       VGR_KEY("retry_min_fitness", retryMinFitness, 0, 1, false),
+      VGR_KEY("max_below_plane_mm", maxBelowPlaneMm, 0, 1000, false),
       VGR_KEY("visible_max_angle_deg", visibleMaxAngleDeg, 1, 89, false),
       VGR_KEY("threads", threads, 1, 64, true),
   };

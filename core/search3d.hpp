@@ -49,6 +49,9 @@ struct Search3dParams {
   double fitnessDistanceMm = 2.5;  // [0.2, 50] a model point "is seen" when the measured z is this close
   double maxContradiction = 0.08;  // [0, 1] share of the model's visible points where the sensor sees through it
   double retryMinFitness = 0.1;    // [0, f_l] a consistent candidate at least this good below f_l asks for a new view
+  // [0, 1000] no model point may lie farther than this beyond the removed plane (table, bin
+  // floor): a part rests on it (docs/3d.md "Evidence"); applies only when a plane was removed
+  double maxBelowPlaneMm = 5;
   double visibleMaxAngleDeg = 70;  // [1, 89] model points seen more obliquely count neither way
   int threads = 1;              // [1, 64] OpenMP threads Open3D may use
   unsigned seed = 1;            // RANSAC's random seed (each locate call is deterministic)
