@@ -46,13 +46,25 @@ constexpr int kClusterMinPoints = 3;
 constexpr int kClusterMinSize = 20;
 constexpr double kClusterZScale = 0.25;
 constexpr double kSceneNormalRadiusMm = 2.5;
+// Coarse-to-fine refinement (cluster search): ICP pairs needed on the voxel grid, and the
+// fitness after the coarse stages below which the fine stage is not run.
+constexpr std::size_t kMinIcpPairs = 15;
+// PPF's hypotheses are up to ~40 deg off; the voxel grid's few points near a part need pairs
+// whose normals differ that much, or ICP runs away on the handful left (measured: housing
+// scene 107, 4 pairs of 392 points at 30 deg).
+constexpr double kCoarseNormalAngleDeg = 45;
+// Measured on scenes 100-105 of each part: true poses had 0.56-1.0 after the coarse stages
+// (0.97-1.0 at the end), 75 % of the others below 0.4. Gate: half of f_l (0.35 by default;
+// never above retry_min_fitness's reach), and the floor check with 10 mm to spare.
+constexpr double kCoarseGateShare = 0.5;
+constexpr double kCoarseFloorMarginMm = 10;
 // PPF (ppf.hpp): F quantised in 12 deg steps and max(voxel, 4 % of the model's diameter)
 // (Drost et al. 2010: 12 deg, 5 %), 30 alpha bins; every 2nd cluster point a reference.
 constexpr double kPpfAngleStepDeg = 12;
 constexpr int kPpfAlphaBins = 30;
 constexpr double kPpfMaxNormalAngleDeg = 150;
 constexpr int kPpfRefStep = 2;
-constexpr double kPpfMaxBucketShare = 1.0;
+constexpr double kPpfMaxBucketShare = 3.0;
 constexpr std::size_t kPpfRanked = 12;
 // FPFH neighbours: Open3D's tutorial caps them at 100, which at a 3 mm voxel cuts a 30 mm
 // radius to ~17 mm; 500 keeps the radius (measured: right matches 9 % -> 18 %).
@@ -88,6 +100,7 @@ struct Candidate {
   int copy = 0;
   bool valid = false;
   double belowPlaneMm = 0;  // deepest model point beyond the removed plane (the floor)
+  double coarseFitness = -1;  // the visibility check's fitness after the coarse ICP (cluster search)
   bool consistent(const Search3dParams& p) const { return valid && vis.contradiction <= p.maxContradiction; }
 };
 
@@ -207,21 +220,48 @@ class Locator3dImpl final : public Locator3d {
       out.reason = fmt::format("{} points left after the ROI and plane removal", sceneDown.size());
       return out;
     }
-    if (ppf_)  // PPF needs normals true to each face: from the sensor's full-resolution points
-      sceneDown.estimateNormalsFrom(all, kSceneNormalRadiusMm, Eigen::Vector3d::Zero());
-    else
+    std::vector<std::vector<std::size_t>> clusters;
+    if (ppf_) {
+      stage("voxel");
+      clusters = sceneClusters(sceneDown);
+      stage("clusters");
+      // PPF needs normals true to each face: from the sensor's full-resolution points, for
+      // the searched clusters' points only (a k-d tree over all of them cost ~80 ms); the
+      // other points face the camera (ICP's normal check keeps them out of its pairs).
+      Points normals;
+      normals.reserve(sceneDown.size());
+      for (const auto& p : sceneDown.points()) normals.push_back(-p.normalized());
+      std::vector<std::size_t> inClusters;
+      Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e18), hi = -lo;
+      std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> boxes;
+      for (const auto& c : clusters) {
+        lo = Eigen::Vector3d::Constant(1e18), hi = -lo;
+        for (std::size_t i : c) lo = lo.cwiseMin(sceneDown.points()[i]), hi = hi.cwiseMax(sceneDown.points()[i]);
+        boxes.emplace_back(lo.array() - v, hi.array() + v);
+        inClusters.insert(inClusters.end(), c.begin(), c.end());
+      }
+      Points dense;
+      for (const auto& p : all.points())
+        for (const auto& b : boxes)
+          if ((p.array() >= b.first.array()).all() && (p.array() <= b.second.array()).all()) {
+            dense.push_back(p);
+            break;
+          }
+      PointSet sub = sceneDown.select(inClusters);
+      sub.estimateNormalsFrom(PointSet(std::move(dense)), kSceneNormalRadiusMm, Eigen::Vector3d::Zero());
+      for (std::size_t j = 0; j < inClusters.size(); ++j) normals[inClusters[j]] = sub.normals()[j];
+      sceneDown.setNormals(std::move(normals));
+    } else {
       sceneDown.estimateNormals(2 * v, 30, Eigen::Vector3d::Zero());  // the camera is at the origin
-    if (!ppf_) sceneDown.computeFpfh(params_.featureRadiusMm, kFpfhMaxNeighbours);
+      sceneDown.computeFpfh(params_.featureRadiusMm, kFpfhMaxNeighbours);
+    }
     Points remaining = all.points();
 
     // Correspondences: each scene point's nearest model feature (paper 004 Sec. 3.2 step 2).
     std::vector<Eigen::Vector2i> sceneToModel;
     std::unique_ptr<backend::CorrespondenceSampler> sampler;
-    std::vector<std::vector<std::size_t>> clusters;
     if (ppf_) {
-      stage("voxel + normals");
-      clusters = sceneClusters(sceneDown);
-      stage("clusters");
+      stage("normals");
     } else if (featureIndex_) {
       for (const auto& m : featureIndex_->match(sceneDown, {}, 1))
         sceneToModel.emplace_back(m[0], poolOwner_[static_cast<std::size_t>(m[1])]);
@@ -233,7 +273,9 @@ class Locator3dImpl final : public Locator3d {
     while (static_cast<int>(out.parts.size()) < params_.maxParts) {
       Candidate best;
       if (ppf_) {
-        best = searchClusters(clusters, sceneDown, active, remaining, depth, k, out.candidates);
+        sceneDown_ = &sceneDown;
+      activeDown_ = &active;
+      best = searchClusters(clusters, sceneDown, active, remaining, depth, k, out.candidates);
       } else {
         for (int c = 0; c < params_.nRotations; ++c) {
           for (auto& cand : hypotheses(c, sceneDown, sampler.get(), active, depth, k, static_cast<int>(out.parts.size()))) {
@@ -268,9 +310,12 @@ class Locator3dImpl final : public Locator3d {
       part.rotationCopy = best.copy;
       part.refined = refined;
       out.parts.push_back(part);
+      if (static_cast<int>(out.parts.size()) >= params_.maxParts) break;
       removeExplained(best.camFromModel, sceneDown, active, remaining, depth, k);
       if (std::count(active.begin(), active.end(), 1) < 30) break;
     }
+    sceneDown_ = nullptr;
+    activeDown_ = nullptr;
     stage("search");
     std::sort(out.parts.begin(), out.parts.end(), [](const Part3d& a, const Part3d& b) { return a.score > b.score; });
     if (!out.parts.empty()) {
@@ -360,6 +405,7 @@ class Locator3dImpl final : public Locator3d {
                            const std::vector<char>& active, const Points& remaining, const cv::Mat& depth, const DepthIntrinsics& k,
                            int& candidates) {
     Candidate best;
+    std::vector<Candidate> coarse;  // hypotheses that passed the coarse stage
     for (std::size_t ci = 0; ci < clusters.size(); ++ci) {
       std::vector<std::size_t> idx;
       for (std::size_t i : clusters[ci])
@@ -374,9 +420,7 @@ class Locator3dImpl final : public Locator3d {
         double votes, score;
       };
       std::vector<Hyp> hyps;
-      stage("-");
       const auto votes = ppf_->match(cl.points(), cl.normals(), kPpfRefStep);
-      stage("  ppf");
       if (const auto* truth = traceTruth()) {
         int near = 0, maxVotes = 0, maxNear = 0;
         for (const auto& vote : votes) {
@@ -409,13 +453,25 @@ class Locator3dImpl final : public Locator3d {
       for (std::size_t i = 0; i < hyps.size() && static_cast<int>(i) < params_.hypothesesPerCopy; ++i) {
         Candidate cand;
         cand.camFromModel = hyps[i].t;
-        refineCandidate(cand, remaining, depth, k);
-        ++candidates;
-        traceCandidate(cand);
-        if (cand.valid && (!best.valid || better(cand, best))) best = cand;
+        if (coarseRefine(cand, depth, k)) {
+          coarse.push_back(cand);
+        } else {
+          ++candidates;
+          traceCandidate(cand);
+        }
       }
-      stage("  refine");
     }
+    stage("  ppf + coarse ICP");
+    // The fine stage, best coarse fit first (over all clusters), until one is accepted at f_h.
+    std::stable_sort(coarse.begin(), coarse.end(), [](const Candidate& a, const Candidate& b) { return a.coarseFitness > b.coarseFitness; });
+    for (auto& cand : coarse) {
+      fineRefine(cand, remaining, depth, k);
+      ++candidates;
+      traceCandidate(cand);
+      if (cand.valid && (!best.valid || better(cand, best))) best = cand;
+      if (best.consistent(params_) && best.vis.fitness >= params_.fHigh) break;
+    }
+    stage("  fine");
     return best;
   }
 
@@ -441,7 +497,7 @@ class Locator3dImpl final : public Locator3d {
       if (std::sscanf(t, "%lf %lf %lf %lf %lf %lf %lf", &p.x, &p.y, &p.z, &p.qw, &p.qx, &p.qy, &p.qz) == 7)
         err = fmt::format(" err {:.2f} mm {:.2f} deg", translationErrorMm(c.camFromModel, toMatrix(p)), rotationErrorDeg(c.camFromModel, toMatrix(p)));
     }
-    std::fprintf(stderr, "  cand below %.1f valid %d out %d cont %.2f f %.3f c %.3f m %d o %d x %d u %d%s\n", c.belowPlaneMm, c.valid, c.vis.outside, c.vis.continuation, c.vis.fitness, c.vis.contradiction,
+    std::fprintf(stderr, "  cand coarse %.2f below %.1f valid %d out %d cont %.2f f %.3f c %.3f m %d o %d x %d u %d%s\n", c.coarseFitness, c.belowPlaneMm, c.valid, c.vis.outside, c.vis.continuation, c.vis.fitness, c.vis.contradiction,
                  c.vis.matched, c.vis.occluded, c.vis.contradicted, c.vis.unknown, err.c_str());
     const Pose cp = toPose(c.camFromModel);
     std::fprintf(stderr, "    at %.1f %.1f %.1f q %.3f %.3f %.3f %.3f\n", cp.x, cp.y, cp.z, cp.qw, cp.qx, cp.qy, cp.qz);
@@ -573,9 +629,38 @@ class Locator3dImpl final : public Locator3d {
   void refineCandidate(Candidate& c, const Points& remaining, const cv::Mat& depth, const DepthIntrinsics& k) {
     const double v = params_.voxelMm;
     const double coarse = std::max(2 * v, 0.5 * params_.ransacDistanceMm);
+    Eigen::Matrix<double, 6, 6> h;
     const PointSet near = nearPoints(c.camFromModel, remaining, coarse);
     if (near.size() < 30) return;
+    for (double d : {coarse, 2 * v, params_.icpDistanceMm})
+      if (!icp(c.camFromModel, near, d, params_.icpIterations, c.rmseMm, &h)) return;
+    alignToBoundaries(c.camFromModel, h, depth, k);
+    c.vis = visibility_.check(c.camFromModel, depth, k, params_.fitnessDistanceMm, params_.visibleMaxAngleDeg, claimed_);
+    c.valid = enoughEvidence(c);
+  }
+
+  // Cluster search, coarse to fine. Coarse: the ICP stages at the RANSAC / voxel distances on
+  // the voxel grid's points (~100-400 near a part instead of ~5000 sensor points), then a
+  // gate: false when the visibility check's fitness is below half of f_l or the model lies
+  // 10 mm beyond the floor. Fine: the last ICP stage on the sensor's points, the boundary
+  // alignment and every check (paper 004 eq. 2 at each stage).
+  bool coarseRefine(Candidate& c, const cv::Mat& depth, const DepthIntrinsics& k) {
+    const double v = params_.voxelMm;
+    const double coarse = std::max(2 * v, 0.5 * params_.ransacDistanceMm);
+    const PointSet nearDown = nearDownPoints(c.camFromModel, coarse);
+    if (nearDown.size() < kMinIcpPairs) return false;
+    for (double d : {coarse, 2 * v})
+      if (!icp(c.camFromModel, nearDown, d, params_.icpIterations, c.rmseMm, nullptr, kMinIcpPairs, kCoarseNormalAngleDeg)) return false;
+    c.coarseFitness = visibility_.check(c.camFromModel, depth, k, params_.fitnessDistanceMm, params_.visibleMaxAngleDeg, claimed_).fitness;
+    if (c.coarseFitness < std::max(params_.retryMinFitness, kCoarseGateShare * params_.fLow)) return false;
+    return belowPlane(c.camFromModel) <= params_.maxBelowPlaneMm + kCoarseFloorMarginMm;
+  }
+  void fineRefine(Candidate& c, const Points& remaining, const cv::Mat& depth, const DepthIntrinsics& k) {
     Eigen::Matrix<double, 6, 6> h;
+    const double v = params_.voxelMm;
+    const double coarse = std::max(2 * v, 0.5 * params_.ransacDistanceMm);
+    const PointSet near = nearPoints(c.camFromModel, remaining, coarse);
+    if (near.size() < 30) return;
     for (double d : {coarse, 2 * v, params_.icpDistanceMm})
       if (!icp(c.camFromModel, near, d, params_.icpIterations, c.rmseMm, &h)) return;
     alignToBoundaries(c.camFromModel, h, depth, k);
@@ -592,11 +677,17 @@ class Locator3dImpl final : public Locator3d {
   // search produced with fitness 0.78-1.00 (a part's side face laid onto a box, the rest of
   // the part "inside" the box and the floor) 41-57 mm; on empty cluttered scenes 16-52 mm.
   bool enoughEvidence(Candidate& c) const {
-    c.belowPlaneMm = 0;
-    if (plane_)
-      for (const auto& p : modelFine_.points())
-        c.belowPlaneMm = std::max(c.belowPlaneMm, -(plane_->head<3>().dot((c.camFromModel * p.homogeneous()).head<3>()) + (*plane_)[3]));
+    c.belowPlaneMm = belowPlane(c.camFromModel);
     return enoughEvidence(c.vis) && c.belowPlaneMm <= params_.maxBelowPlaneMm;
+  }
+  // The deepest model point beyond the removed plane (mm; 0 when none is, or no plane was removed).
+  double belowPlane(const Eigen::Matrix4d& camFromModel) const {
+    double below = 0;
+    if (!plane_) return below;
+    const Eigen::Vector3d n = camFromModel.topLeftCorner<3, 3>().transpose() * plane_->head<3>();  // in the model frame
+    const double d = plane_->head<3>().dot(camFromModel.topRightCorner<3, 1>()) + (*plane_)[3];
+    for (const auto& p : modelFine_.points()) below = std::max(below, -(n.dot(p) + d));
+    return below;
   }
   bool enoughEvidence(const Visibility& v) const {
     const int seen = v.matched + v.occluded + v.contradicted;
@@ -637,6 +728,17 @@ class Locator3dImpl final : public Locator3d {
                                                  params_.visibleMaxAngleDeg, claimed_);
   }
 
+  // The voxel grid's points (sceneDown_, still active) within the model's radius + margin of
+  // the candidate's centroid, with their normals.
+  PointSet nearDownPoints(const Eigen::Matrix4d& camFromModel, double margin) const {
+    const Eigen::Vector3d centre = (camFromModel * centroid_.homogeneous()).head<3>();
+    const double r2 = (radius_ + margin) * (radius_ + margin);
+    std::vector<std::size_t> idx;
+    for (std::size_t i = 0; i < sceneDown_->size(); ++i)
+      if ((*activeDown_)[i] && (sceneDown_->points()[i] - centre).squaredNorm() <= r2) idx.push_back(i);
+    return sceneDown_->select(idx);
+  }
+
   // The measured points within the model's radius + margin of the candidate's centroid,
   // with normals (towards the camera).
   PointSet nearPoints(const Eigen::Matrix4d& camFromModel, const Points& remaining, double margin) const {
@@ -655,11 +757,11 @@ class Locator3dImpl final : public Locator3d {
   // fewer than 30 pairs are left.
   // hessian (optional): J^T J in the camera frame (rotation about the part's centroid).
   bool icp(Eigen::Matrix4d& camFromModel, const PointSet& near, double maxDist, int iterations, double& rmse,
-           Eigen::Matrix<double, 6, 6>* hessian = nullptr) const {
+           Eigen::Matrix<double, 6, 6>* hessian = nullptr, std::size_t minPairs = 30, double normalAngleDeg = kNormalAngleDeg) const {
     // Source = measured points, target = model: the model frame's J^T J is turned into the
     // camera frame below.
-    const auto res = icpTarget_->align(near, maxDist, kNormalAngleDeg, camFromModel.inverse(), iterations, centroid_);
-    if (res.correspondences < 30) return false;
+    const auto res = icpTarget_->align(near, maxDist, normalAngleDeg, camFromModel.inverse(), iterations, centroid_);
+    if (res.correspondences < minPairs) return false;
     camFromModel = res.transform.inverse();
     rmse = res.rmseMm;
     if (hessian) {
@@ -704,7 +806,9 @@ class Locator3dImpl final : public Locator3d {
   int minSeen_ = 0;  // kMinViewShare x the median visible model points
   VisibilityCheck visibility_;
   cv::Mat claimed_;  // pixels of the parts found in the current call
-  std::optional<Eigen::Vector4d> plane_;  // the removed plane (camera on its positive side), if any
+  std::optional<Eigen::Vector4d> plane_;
+  const PointSet* sceneDown_ = nullptr;        // cluster search: the current call's voxel grid, with normals
+  const std::vector<char>* activeDown_ = nullptr;  // ... and which of its points no found part explains  // the removed plane (camera on its positive side), if any
 };
 
 }  // namespace
