@@ -23,7 +23,7 @@ TEST(PpfModel, VotesForTheTruePoseOfAMovedPartialView) {
       pts.emplace_back(s.x, s.y, s.z);
       nrm.emplace_back(s.nx, s.ny, s.nz);
     }
-    const vision::cloud::PpfModel model(pts, nrm, 3.2, 12, 30, 150);
+    const vision::cloud::PpfModel model(pts, nrm, 3.2, 12, 30, 150, 3.0);  // the locator's settings
     EXPECT_GT(model.pairs(), pts.size());
     // The scene: the points facing a camera looking along +z of the moved part.
     Eigen::Matrix4d truth = Eigen::Matrix4d::Identity();
