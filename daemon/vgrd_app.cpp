@@ -2,6 +2,8 @@
 
 #include <systemd/sd-daemon.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <cstdlib>
@@ -15,6 +17,7 @@
 #include <opencv2/core.hpp>
 
 #include "core/log.hpp"
+#include "core/log_limiter.hpp"
 #include "daemon/commissioning_status.hpp"
 #include "daemon/cycle_runner.hpp"
 #include "daemon/drift_monitor.hpp"
@@ -55,6 +58,12 @@ struct VgrdApp::Impl {
   std::uint64_t watchdogUsec = 0;  // systemd's WatchdogSec in µs; 0 = not asked for pings
   Watchdog watchdog;               // every long-lived thread's heartbeat (daemon/watchdog.hpp)
   bool stallReported = false;
+  // Hand-over lag: how long a published result waited for the I/O thread before robots
+  // could get it (see handOver()). I/O thread only.
+  static constexpr double kLateHandOverMs = 20;
+  log::LogLimiter lateHandOverLog{20, std::chrono::seconds(60)};
+  std::uint64_t lateHandOvers = 0;
+  double maxHandOverMs = 0;
 
   explicit Impl(config::CellConfig c) : cfg(std::move(c)) {}
 
@@ -71,13 +80,33 @@ struct VgrdApp::Impl {
     }
     if (archive) r.archived = archive->offer(r, image);
     plant->frameDone(r, image);
-    asio::post(io, [this, r] { results->onResult(r); });
+    asio::post(io, [this, r, posted = std::chrono::steady_clock::now()] { handOver(r, posted); });
     journal.append(r);
     plant->resultDelivered(r);  // MQTT (the JSON payload costs the cycle thread ~tens of µs): after the PLC
     if (r.status == Status::Ok)
       log::debug("cycle", "cycle {} ok in {:.1f} ms", r.cycleId, r.totalMs);
     else
       log::info("cycle", "cycle {} ended {} ({})", r.cycleId, statusCode(r.status), statusName(r.status));
+  }
+
+  // I/O thread: the result reaches the robots' side (waiting requests are answered here).
+  // Normally within a millisecond of publish(); when the I/O thread was busy or not
+  // scheduled (an overloaded PC), requests that arrived meanwhile are read only after this
+  // result and the next may both be in, and a robot asking for "the newest" then gets the
+  // next one (result_store.hpp's GET semantics). The line names the cycle so such a skip can
+  // be told from a fault (`vgr soak` reads it: docs/robustness.md); rate-limited, with the
+  // count and the worst lag in the 60 s summary.
+  void handOver(const CycleResult& r, std::chrono::steady_clock::time_point posted) {
+    const double lagMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - posted).count();
+    if (lagMs >= kLateHandOverMs) {
+      ++lateHandOvers;
+      maxHandOverMs = std::max(maxHandOverMs, lagMs);
+      log::limitedLog(lateHandOverLog, "cycle", "late hand-overs", true,
+                      "cycle {}: robots got the result {:.1f} ms after it was published (the I/O thread was busy or "
+                      "not scheduled; robot replies and the web page were as late)",
+                      r.cycleId, lagMs);
+    }
+    results->onResult(r);
   }
 
   void setPlcReady(bool ready) {
@@ -161,6 +190,10 @@ struct VgrdApp::Impl {
     log::info("main", "journal: {} records ({:.1f} µs per write), {} syncs ({:.1f} µs each), {} rotations", j.records,
               j.records ? static_cast<double>(j.writeMicros) / static_cast<double>(j.records) : 0.0, j.syncs,
               j.syncs ? static_cast<double>(j.syncMicros) / static_cast<double>(j.syncs) : 0.0, j.rotations);
+    if (lateHandOvers > 0)
+      log::info("main", "hand-over: {} results reached the robots' side >= {:.0f} ms after publish (worst {:.1f} ms), "
+                "{} of those lines held back", lateHandOvers, kLateHandOverMs, maxHandOverMs,
+                lateHandOverLog.heldBackTotal());
     // Connection counters (the connection log lines themselves are rate-limited).
     for (const auto& robot : robots) {
       const protocol::RobotServerStats st = robot->stats();

@@ -37,6 +37,7 @@
 #include "tools/vgr/journal_bench.hpp"
 #include "tools/vgr/repeatability.hpp"
 #include "tools/vgr/replay.hpp"
+#include "tools/vgr/model.hpp"
 #include "tools/vgr/sim_render.hpp"
 #include "tools/vgr/soak.hpp"
 #include "tools/vgr/subcommand.hpp"
@@ -55,6 +56,7 @@ constexpr Group kGroups[] = {
     {"calibrate", "camera intrinsics, hand-eye, work plane, synthetic calibration data, verify"},
     {"sim", "simulation tools"},
     {"classify", "part classifier of paper 002: train, eval (docs/classification.md)"},
+    {"model", "3D part models from depth views: build, eval (docs/3d.md)"},
 };
 
 struct Entry {
@@ -91,6 +93,8 @@ int main(int argc, char** argv) {
       {nullptr, std::make_unique<tools::ReplayCommand>()},
       {"classify", std::make_unique<tools::ClassifyTrainCommand>()},
       {"classify", std::make_unique<tools::ClassifyEvalCommand>()},
+      {"model", std::make_unique<tools::ModelBuildCommand>()},
+      {"model", std::make_unique<tools::ModelEvalCommand>()},
       {nullptr, std::make_unique<tools::JournalBenchCommand>()},
   };
 

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <set>
 
 #include <fmt/format.h>
@@ -92,6 +93,17 @@ std::vector<JournalEntry> readJournals(const std::string& path, int& unparsable,
     }
   }
   std::sort(out.begin(), out.end(), [](const JournalEntry& a, const JournalEntry& b) { return a.publish < b.publish; });
+  return out;
+}
+
+std::map<std::uint32_t, double> readLateHandOvers(const std::string& vgrdLogPath) {
+  // "... cycle 59005: robots got the result 51.2 ms after it was published (...)"
+  static const std::regex line(R"(cycle (\d+): robots got the result ([0-9.]+) ms after it was published)");
+  std::map<std::uint32_t, double> out;
+  std::ifstream in(vgrdLogPath);
+  std::smatch m;
+  for (std::string l; std::getline(in, l);)
+    if (std::regex_search(l, m, line)) out[static_cast<std::uint32_t>(std::stoul(m[1].str()))] = std::stod(m[2].str());
   return out;
 }
 
@@ -216,11 +228,16 @@ CheckResult check(const CheckInput& in) {
   long long robotProblems = 0;
   std::vector<const JournalEntry*> jobCycles;  // by publish time
   for (const auto& e : in.journal) jobCycles.push_back(&e);
+  // By vgrd's order (cycle id): the journal's publish time (trigger time to the ms +
+  // total_ms) can put two results that came out together in either order.
+  std::vector<const JournalEntry*> cyclesById = jobCycles;
+  std::sort(cyclesById.begin(), cyclesById.end(),
+            [](const JournalEntry* a, const JournalEntry* b) { return a->cycle < b->cycle; });
   for (const auto& robot : in.robots) {
     const auto& o = robot.options;
     const std::string name = o.name;
     long long replies = 0, rok = 0, rdup = 0, rwrong = 0, rlate = 0, rmalformed = 0, rnoReply = 0, rinterrupted = 0,
-              rmissed = 0, rbadError = 0, dropped = 0, stalled = 0, malformedSent = 0;
+              rmissed = 0, rbadError = 0, dropped = 0, stalled = 0, malformedSent = 0, rnotJudgedLate = 0;
     std::set<long long> got;  // cycles the robot received (or threw away itself)
     const double lateS = (in.replyDeadlineMs + in.slackMs) / 1000.0;
     const bool strict = o.dialect == protocol::Dialect::Strict;
@@ -315,18 +332,23 @@ CheckResult check(const CheckInput& in) {
       std::vector<double> drops;
       for (const auto& r : robot.records)
         if (r.kind == RequestKind::Dropped) drops.push_back(r.replied);
-      for (std::size_t i = 0; i < jobCycles.size(); ++i) {
-        const JournalEntry& c = *jobCycles[i];
+      for (std::size_t i = 0; i < cyclesById.size(); ++i) {
+        const JournalEntry& c = *cyclesById[i];
         if (c.job != o.job || got.count(c.cycle)) continue;
         if (killedWithin(c.publish - 1.0, c.publish + 0.5)) continue;  // went down with vgrd
         if (std::any_of(drops.begin(), drops.end(), [&](double d) { return c.publish > d - kEdge && c.publish < d + 0.2; }))
           continue;
         double next = 1e300;
-        for (std::size_t k = i + 1; k < jobCycles.size(); ++k)
-          if (jobCycles[k]->job == o.job) {
-            next = jobCycles[k]->publish;
+        for (std::size_t k = i + 1; k < cyclesById.size(); ++k)
+          if (cyclesById[k]->job == o.job) {
+            next = cyclesById[k]->publish;
             break;
           }
+        if (const auto lag = in.lateHandOverMs.find(c.cycle);
+            lag != in.lateHandOverMs.end() && c.publish + lag->second / 1000.0 >= next - kEdge) {
+          ++rnotJudgedLate;  // vgrd's I/O thread took this result up with the next one
+          continue;
+        }
         const RobotRequestRecord* eligible = nullptr;
         // A request sent more than its deadline (+ margin) before the cycle was answered before it.
         const double from = c.publish - in.replyDeadlineMs / 1000.0 - 1.0;
@@ -364,6 +386,7 @@ CheckResult check(const CheckInput& in) {
                         {"malformed_replies", rmalformed},
                         {"no_reply", rnoReply},
                         {"missed", rmissed},
+                        {"not_judged_late_hand_over", rnotJudgedLate},
                         {"interrupted", rinterrupted},
                         {"malformed_requests_sent", malformedSent},
                         {"malformed_requests_misanswered", rbadError},
@@ -389,6 +412,7 @@ CheckResult check(const CheckInput& in) {
   s["p50_latency_ms"] = r3(percentile(latencies, 0.5));
   s["p99_latency_ms"] = r3(percentile(latencies, 0.99));
   s["plc_mid_handshake_drops"] = plcDrops;
+  s["late_hand_overs"] = in.lateHandOverMs.size();
   s["journal"] = {{"lines", in.journal.size()},
                   {"duplicates", journalDuplicates},
                   {"missing", journalMissing},

@@ -11,7 +11,10 @@
 // cycle reaches a robot at most once and with the journal's pose; a malformed request gets
 // exactly its error status; and no cycle is `missed`: one that a robot was waiting for (or
 // asked for before a newer one came) and never got (a part handed to a connection that
-// was dropped must come back to the robot's next request).
+// was dropped must come back to the robot's next request). "Next" is by vgrd's cycle order.
+// A cycle whose result vgrd's I/O thread took up only when the next result was already
+// there (vgrd logged its late hand-over) is not judged but counted: a request that reached
+// vgrd meanwhile was read after both, and "the newest" is then rightly the next one.
 #pragma once
 
 #include <cstdint>
@@ -45,6 +48,9 @@ struct CheckInput {
   };
   std::vector<Robot> robots;
   std::vector<double> kills;             // wall times vgrd was killed (-9)
+  // vgrd's own clock: cycles whose result reached the robots' side (its I/O thread) late,
+  // in ms after publish, from vgrd's "robots got the result N ms after" log lines.
+  std::map<std::uint32_t, double> lateHandOverMs;
   int cycleDeadlineMs = 1500;
   int replyDeadlineMs = 1500;
   int slackMs = 250;                     // measurement slack (polling, scheduling) on every deadline
@@ -56,6 +62,10 @@ struct CheckResult {
   std::vector<std::string> problems;     // the first few of each kind, for the log
   bool pass = false;
 };
+
+// The late hand-overs vgrd logged (daemon/vgrd_app.cpp, handOver()): cycle -> ms. Lines
+// vgrd's rate limit held back are simply absent (those cycles are then judged as usual).
+std::map<std::uint32_t, double> readLateHandOvers(const std::string& vgrdLogPath);
 
 // Reads <path>, <path>.1 ... (rotated) line by line; lines that do not parse are counted.
 std::vector<JournalEntry> readJournals(const std::string& path, int& unparsable, int& files);
