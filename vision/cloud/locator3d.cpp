@@ -4,7 +4,13 @@
 // fitness thresholds f_l / f_h; several parts per view by removing each found part's points
 // and searching again.
 //
-// Where we differ from the paper, and why (measured in docs/3d.md):
+// Where we differ from the paper, and why (measured in docs/3d.md "Recall and speed"):
+//  - by default (clusterMm > 0) the scene is split into objects (DBSCAN after the floor is
+//    removed) and each object of a part's size gets pose hypotheses by point-pair-feature
+//    voting (ppf.hpp) instead of FPFH + RANSAC (which found no hypothesis within 15 mm /
+//    15 deg of the truth on its misses), refined coarse to fine by ICP (eq. 2); a candidate
+//    must also not reach below the removed floor. n_R copies are not needed there (the
+//    rotation about each normal is voted). With clusterMm = 0, the former pipeline:
 //  - the model's features are computed on what each of modelViews viewpoints sees of it, so
 //    they describe the same partial surfaces a depth view shows (the whole model's FPFH
 //    mixes in hidden faces: 1-4 % of scene points matched the right place, vs 5-30 %);
@@ -404,11 +410,12 @@ class Locator3dImpl final : public Locator3d {
     return out;
   }
 
-  // Registers the model against each cluster on its own (paper 004 Sec. 3.2 steps 1-3 per
-  // cluster): FPFH of the cluster's points only (no neighbouring object in the histograms,
-  // as the model's view features have none), k nearest model features per point, RANSAC
-  // with the 2nd and 3rd sample in the same cluster, ICP (eq. 2). The best candidate over
-  // all clusters.
+  // Registers the model against each cluster on its own (paper 004 Sec. 3.2, with step 2's
+  // FPFH + RANSAC replaced by PPF voting, ppf.hpp; docs/3d.md "Recall and speed"): the
+  // cluster's reference-point peaks, merged and ranked, the best hypothesesPerCopy through
+  // the coarse stage (ICP, eq. 2, on the voxel grid + gate); then over all clusters the fine
+  // stage (ICP, eq. 2, on the sensor's points + every check), best coarse fit first, until
+  // one is accepted at f_h (paper 004 Sec. 5). The best candidate seen.
   Candidate searchClusters(const std::vector<std::vector<std::size_t>>& clusters, const PointSet& sceneDown,
                            const std::vector<char>& active, const Points& remaining, const cv::Mat& depth, const DepthIntrinsics& k,
                            int& candidates) {
