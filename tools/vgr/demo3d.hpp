@@ -32,8 +32,8 @@ struct Demo3dScenes {
   std::string part = "housing";
   int clutter = 0;
   double tiltMaxDeg = 0;
-  double cameraTiltMaxDeg = 0;
-  bool bin = false;         // on a table (no bin walls in view)
+  double cameraTiltMaxDeg = 5;
+  bool bin = true;          // in the bin (walls in view)
   std::string face;         // any stable face
   double emptyRatio = 0;   // tests: scenes without a part (NO_PART_FOUND)
   double occlusion = 0;    // tests: a board hiding this share of the part (RETRY_NEW_VIEWPOINT)
