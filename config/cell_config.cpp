@@ -16,6 +16,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "config/job.hpp"
+#include "config/job3d.hpp"
 #include "config/yaml_section.hpp"
 
 namespace vgr::config {
@@ -343,6 +344,22 @@ void parseJobFolder(Section& s, JobConfig& j) {
   fs::path folder(j.folder);
   if (folder.is_relative()) folder = fs::path(s.file()).parent_path() / folder;
   j.folder = folder.lexically_normal().string();
+  auto kind = jobKind(j.folder);
+  if (!kind) s.fail(s.get("folder"), "folder", kind.error().message);
+  if (*kind == "3d") {
+    // A 3D job (config/job3d.hpp): the model and search come from its job.yaml; the cell
+    // entry names it and may set limits. vgrd builds its locator at start (model.ply read there).
+    for (const char* k : {"threshold", "min_area_px", "max_area_px", "part_height_mm", "reference", "method", "angle_offset_deg"})
+      if (s.get(k)) s.fail(s.get(k), k, std::string("not for a 3D job (the folder's job.yaml says kind: 3d)"));
+    auto job = loadJob3d(j.folder);
+    if (!job) s.fail(s.get("folder"), "folder", job.error().message);
+    if (!fs::exists(job->modelPath())) s.fail(s.get("folder"), "folder", job->modelPath() + ": the model cloud is missing");
+    j.depth = true;
+    j.method = "3d";
+    parseLimits(Section(s.file(), s.get("limits"), s.join("limits")), j.limits);
+    s.finish();
+    return;
+  }
   for (const char* k : {"threshold", "min_area_px", "max_area_px", "part_height_mm", "reference"})
     if (s.get(k)) s.fail(s.get(k), k, std::string("set in the job folder's job.yaml, not here (the job has a 'folder')"));
   parseLimits(Section(s.file(), s.get("limits"), s.join("limits")), j.limits);
@@ -385,7 +402,7 @@ void parseJob(Section s, JobConfig& j) {
   s.finish();
 }
 
-void parseCalibration(Section s, CalibrationFilesConfig& c, const YAML::Node& node, const std::string& file) {
+void parseCalibration(Section s, CalibrationFilesConfig& c, const YAML::Node& node, const std::string& file, bool depthCamera) {
   if (!node || node.IsNull()) return;
   c.enabled = true;
   const std::string dir = std::filesystem::path(file).parent_path().string();
@@ -409,7 +426,15 @@ void parseCalibration(Section s, CalibrationFilesConfig& c, const YAML::Node& no
       s.fail(drift, "drift", "the drift monitor needs 'check': the file with the fiducial's stored position "
                              "(vgr calibrate verify --store, docs/calibration.md)");
   }
-  if (node.IsMap() && node["multiheight"]) {
+  if (depthCamera) {
+    // A depth camera sends its intrinsics with every frame; a 3D pose needs no work plane.
+    for (const char* key : {"intrinsics", "plane", "multiheight", "drift"})
+      if (node.IsMap() && node[key])
+        s.fail(node[key], key, "not for a depth camera (pixel_format Coord3D_C16): it sends its intrinsics with every "
+                               "frame and a 3D pose needs no work plane; give 'handeye' alone (vgr calibrate handeye --cloud)");
+    s.require("handeye");
+    readPath("handeye", c.handeye);
+  } else if (node.IsMap() && node["multiheight"]) {
     // Paper 001's multi-height map alone: it needs no camera model.
     for (const char* key : {"intrinsics", "handeye", "plane"})
       if (node[key]) s.fail(node[key], key, "give either 'multiheight' or 'intrinsics' + 'handeye' + 'plane', not both");
@@ -591,6 +616,21 @@ CellConfig parse(const YAML::Node& root, const std::string& file) {
     if (!ids.insert(j.id).second) top.fail(jobs[i]["id"], path + ".id", "duplicate job id " + std::to_string(j.id));
     c.jobs.push_back(j);
   }
+  // A job runs on the cell's one camera: a 3D job needs depth frames, a 2D method gray images.
+  // Refused here (vgrd --check, vgr check, vgrd's start), naming the job and the camera.
+  for (std::size_t k = 0; k < c.jobs.size(); ++k) {
+    const JobConfig& j = c.jobs[k];
+    if (j.depth == c.camera.depth()) continue;
+    const std::string path = "jobs[" + std::to_string(k) + "]";
+    const YAML::Node at = j.folder.empty() ? jobs[k] : jobs[k]["folder"];
+    top.fail(at, path + (j.folder.empty() ? "" : ".folder"),
+             j.depth ? fmt::format("job {} is a 3D job (kind: 3d) and camera '{}' is a 2D camera (pixel_format {}): a 3D "
+                                   "job needs a depth camera (pixel_format Coord3D_C16)",
+                                   j.id, c.camera.name, c.camera.pixelFormat)
+                     : fmt::format("job {} is a 2D job (method {}) and camera '{}' is a depth camera (pixel_format "
+                                   "Coord3D_C16): a 2D method needs gray images; a depth camera runs 3D jobs (kind: 3d)",
+                                   j.id, j.method, c.camera.name));
+  }
   // A robot's default job must be one of the cell's jobs (checked once the jobs are known).
   for (std::size_t i = 0; i < c.robots.size(); ++i) {
     const int job = c.robots[i].job;
@@ -605,8 +645,9 @@ CellConfig parse(const YAML::Node& root, const std::string& file) {
     if (j.referenceGiven) continue;
     const std::string path = "jobs[" + std::to_string(k) + "]";
     const YAML::Node at = j.folder.empty() ? jobs[k] : jobs[k]["folder"];
-    const std::string where = j.folder.empty() ? "give `reference: {x_mm, y_mm, z_mm, rz_deg}` here"
-                                               : "give `reference:` in " + j.folder + "/job.yaml";
+    const std::string where = j.depth           ? "a 3D job has no taught reference (docs/3d.md): deliver poses"
+                              : j.folder.empty() ? "give `reference: {x_mm, y_mm, z_mm, rz_deg}` here"
+                                                 : "give `reference:` in " + j.folder + "/job.yaml";
     for (std::size_t i = 0; i < c.robots.size(); ++i)
       if (c.robots[i].delivery == Delivery::Offset)
         top.fail(at, path + (j.folder.empty() ? ".reference" : ".folder"),
@@ -620,7 +661,7 @@ CellConfig parse(const YAML::Node& root, const std::string& file) {
   parseSim(Section(file, top.get("sim"), "sim"), c.sim);
   {
     const YAML::Node cal = top.get("calibration");
-    parseCalibration(Section(file, cal, "calibration"), c.calibration, cal, file);
+    parseCalibration(Section(file, cal, "calibration"), c.calibration, cal, file, c.camera.depth());
   }
   parseWeb(Section(file, top.get("web"), "web"), c.web);
   if (c.web.enabled && ports.contains(c.web.port))  // vgrd binds it next to the robots' and Modbus ports

@@ -66,6 +66,9 @@ struct CameraConfig {
   bool replayLoop = true;          // driver "replay": start again after the last image
   int reconnectMinMs = 200;        // ms, [10, 60000]: first back-off after the camera drops out
   int reconnectMaxMs = 2000;       // ms, [reconnectMinMs, 600000]
+  // A depth camera (pixel_format Coord3D_C16): it runs 3D jobs only, and a 2D camera 2D jobs
+  // only (the config refuses a job of the other kind, naming the job and the camera).
+  bool depth() const { return pixelFormat == "Coord3D_C16"; }
 };
 const char* triggerModeName(TriggerMode m);  // "software", "hardware", "free_run"
 
@@ -195,6 +198,11 @@ struct JobConfig {
   // (unless `method` is given here), part_height_mm and reference come from its job.yaml,
   // and vgrd builds the method at start.
   std::string folder;
+  // The folder's job.yaml says `kind: 3d` (config/job3d.hpp, docs/3d.md): a part model found
+  // in a depth frame (vision/cloud), the pose with all six degrees of freedom. Such a job has
+  // no taught reference (its offsets are its poses; robots in offset mode are refused), no
+  // `method` and no `angle_offset_deg`; it needs a depth camera.
+  bool depth = false;
 };
 
 struct SimConfig {
@@ -235,6 +243,9 @@ struct CalibrationFilesConfig {
   std::string intrinsics;  // intrinsics.yaml (vgr calibrate intrinsics)
   std::string handeye;     // handeye.yaml, eye-to-hand (vgr calibrate handeye)
   std::string plane;       // plane.yaml (vgr calibrate plane)
+  // A depth camera (CameraConfig::depth()) needs handeye.yaml alone (`vgr calibrate handeye
+  // --cloud`, eye-to-hand or eye-in-hand): it sends its intrinsics with every frame and a 3D
+  // pose needs no work plane, so intrinsics, plane, multiheight and drift are refused there.
   std::string multiHeight; // multiheight.yaml (paper 001, section 4.1); excludes the three above
   // check.yaml (vgr calibrate verify --store, vision/calib/check_file.hpp): the stored
   // positions of the check targets (a fixed fiducial, a check part, the plate put back).
@@ -341,6 +352,16 @@ const std::string& embeddedSimCellYaml();
 const std::string& embeddedSimCalibIntrinsics();
 const std::string& embeddedSimCalibHandEye();
 const std::string& embeddedSimCalibPlane();
+
+// The simulated 3D cell (`vgr demo --3d`), embedded from config/examples/: sim-cell-3d.yaml,
+// its depth camera's hand-eye (sim-calib-3d/handeye.yaml, made by
+// scripts/calibrate-sim-cell-3d.sh), that calibration set's truth (sim-calib-3d/truth.yaml:
+// where the simulated camera really is) and its 3D job's job.yaml (sim-job-3d/job.yaml; the
+// model.ply beside it comes from the depth renderer).
+const std::string& embeddedSimCell3dYaml();
+const std::string& embeddedSimCalib3dHandEye();
+const std::string& embeddedSimCalib3dTruth();
+const std::string& embeddedSimJob3dYaml();
 
 // Writes `yamlText` (default: the embedded example) as DIR/sim-cell.yaml and the example's
 // calibration files as DIR/sim-calib/{intrinsics,handeye,plane}.yaml, where the example's

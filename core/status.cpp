@@ -8,6 +8,7 @@ std::string_view statusName(Status s) {
     case Status::NoPartFound: return "NO_PART_FOUND";
     case Status::ResultNotReady: return "RESULT_NOT_READY";
     case Status::NoNewTrigger: return "NO_NEW_TRIGGER";
+    case Status::RetryNewViewpoint: return "RETRY_NEW_VIEWPOINT";
     case Status::UnknownCommand: return "UNKNOWN_COMMAND";
     case Status::BadArgument: return "BAD_ARGUMENT";
     case Status::BusyOverrun: return "BUSY_OVERRUN";

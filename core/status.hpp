@@ -11,6 +11,10 @@ enum class Status : std::int16_t {
   NoPartFound = 1,
   ResultNotReady = 2,
   NoNewTrigger = 3,
+  // A 3D job (paper 004): something consistent with the view covers too little of what this
+  // viewpoint should show of the part (fitness below f_l): move the camera and trigger again.
+  // No pose; not an error (the PLC's ERROR bit stays off). docs/3d.md "Outcomes".
+  RetryNewViewpoint = 4,
   UnknownCommand = -1,
   BadArgument = -2,
   BusyOverrun = -3,

@@ -58,14 +58,24 @@ CheckResult checkCellConfig(const std::string& path) {
   auto problem = [&](const std::string& what) { return std::unexpected(CheckFailure{1, path + ": " + what}); };
 
   // Each job's method, built as vgrd's start builds it (its errors name the job.yaml line).
-  for (const auto& job : cfg->jobs)
-    if (auto loc = makeJobLocator(job); !loc) return problem(loc.error().message);
+  // A 3D job's locator is built as vgrd builds it (its model's features: seconds).
+  for (const auto& job : cfg->jobs) {
+    if (!job.depth) {
+      if (auto loc = makeJobLocator(job); !loc) return problem(loc.error().message);
+    } else if (auto loc = makeJobLocator3d(job); !loc) {
+      return problem(loc.error().message);
+    }
+  }
+  // A depth camera's cell: its hand-eye file alone (the camera gives the intrinsics).
+  if (cfg->camera.depth()) {
+    if (auto frame = makeDepthCellFrame(*cfg); !frame) return problem("calibration: " + frame.error().message);
+  }
   // The calibration vgrd maps with: files present, consistent and within their residual limits.
-  auto mapping = makeCellMapping(*cfg);
+  auto mapping = cfg->camera.depth() ? Result<std::unique_ptr<vision::calib::PixelMapping>>(nullptr) : makeCellMapping(*cfg);
   if (!mapping) return problem("calibration: " + mapping.error().message);
   // A camera ROI fixes the frame size: a calibration for another size answers every cycle
   // -6 (CycleRunner's size check). Without both ROI sizes the size is the sensor's: unknown here.
-  if (const auto size = (*mapping)->imageSize(); size && cfg->camera.roiWidth > 0 && cfg->camera.roiHeight > 0 &&
+  if (const auto size = *mapping ? (*mapping)->imageSize() : std::nullopt; size && cfg->camera.roiWidth > 0 && cfg->camera.roiHeight > 0 &&
                                                  (size->width != cfg->camera.roiWidth || size->height != cfg->camera.roiHeight))
     return problem(fmt::format("key 'camera.roi': the camera delivers {}x{} px, the calibration is for {}x{} px",
                                cfg->camera.roiWidth, cfg->camera.roiHeight, size->width, size->height));

@@ -45,10 +45,34 @@ WarmSize warmUpSize(const config::CellConfig& cell, const vision::calib::PixelMa
           "model principal point"};
 }
 
+// Parts outside the job's limits are set apart (journal only), keeping the order.
+void setApartOutsideLimits(const JobLimits& limits, CycleResult& r) {
+  if (limits.empty()) return;
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < r.parts.size(); ++i) {
+    std::string why = limitViolation(limits, r.parts[i].pose, r.parts[i].offset);
+    if (why.empty()) r.parts[kept++] = r.parts[i];
+    else r.rejected.push_back({r.parts[i], std::move(why)});
+  }
+  r.parts.resize(kept);
+}
+
 }  // namespace
 
 CycleRunner::CycleRunner(const config::CellConfig& cell, drivers::CameraWorker& camera, CycleSinks sinks)
     : cell_(cell), camera_(camera), sinks_(std::move(sinks)), defaultJob_(cell.jobs.empty() ? 0 : cell.jobs.front().id) {
+  if (cell.camera.depth()) {
+    // A depth camera's cell: 3D jobs only (the config refuses 2D ones), mapped by the hand-eye.
+    auto f = makeDepthCellFrame(cell);
+    if (f) {
+      depthFrame_ = std::move(*f);
+      log::info("cycle", "depth camera: 3D poses through {}", depthFrame_->description);
+    } else {
+      calibrationError_ = f.error().message;
+      log::error("cycle", "NOT_CALIBRATED: {}", calibrationError_);
+    }
+    return;
+  }
   auto m = makeCellMapping(cell);
   if (m) {
     mapping_ = std::move(*m);
@@ -79,7 +103,7 @@ CycleRunner::CycleRunner(const config::CellConfig& cell, drivers::CameraWorker& 
 CycleRunner::~CycleRunner() { stop(); }
 
 Result<void> CycleRunner::prepareJobs() {
-  const WarmSize warmSize = warmUpSize(cell_, mapping_.get());
+  const WarmSize warmSize = warmUpSize(cell_, mapping_.get());  // 2D jobs
   for (const auto& job : cell_.jobs) {
     PreparedJob prepared;
     prepared.rules.heightMm = job.partHeightMm;
@@ -87,6 +111,18 @@ Result<void> CycleRunner::prepareJobs() {
     prepared.rules.reference =
         poseFromXyzRz(job.reference.x, job.reference.y, job.reference.z, job.reference.rzDeg * kDegToRad);
     prepared.limits = job.limits;
+    if (job.depth) {
+      // The model's features are computed here, not in the first cycle.
+      const auto buildStart = Clock::now();
+      auto loc3d = makeJobLocator3d(job);
+      if (!loc3d) return std::unexpected(loc3d.error());
+      prepared.locator3d = std::move(*loc3d);
+      const Search3dParams& p = prepared.locator3d->params();
+      log::info("cycle", "job {}: 3D model from {} ({:.0f} ms; voxel {} mm, n_R {}, f_l {}, f_h {}, {} thread(s))", job.id,
+                job.folder, msSince(buildStart), p.voxelMm, p.nRotations, p.fLow, p.fHigh, p.threads);
+      jobs_[job.id] = std::move(prepared);
+      continue;
+    }
     auto loc = makeJobLocator(job);
     if (!loc) return std::unexpected(loc.error());
     prepared.locator = std::move(*loc);
@@ -190,6 +226,84 @@ void CycleRunner::run() {
   }
 }
 
+CycleResult CycleRunner::ended(CycleResult r, const Trigger& t, Status status, const std::string& why) {
+  r.status = status;
+  r.parts.clear();
+  r.rejected.clear();
+  r.totalMs = msSince(t.at);
+  log::warn("cycle", "cycle {}: {}", t.cycleId, why);
+  return r;
+}
+
+CycleResult CycleRunner::runCycle3d(const Trigger& t, PreparedJob& job, CycleResult r) {
+  const auto deadline = t.at + milliseconds(cell_.cycleDeadlineMs);
+  auto end = [&](Status status, const std::string& why) { return ended(std::move(r), t, status, why); };
+  if (!depthFrame_)
+    return end(Status::BadArgument, fmt::format("job {} is a 3D job and camera '{}' is a 2D camera", t.jobId, cell_.camera.name));
+  // The camera on the flange: the pose of this image is the trigger's flange pose.
+  if (depthFrame_->eyeInHand && !t.flange)
+    return end(Status::BadArgument, fmt::format("job {}: the camera is on the flange (eye-in-hand) and this {} trigger "
+                                                "carries no flange pose; a robot sends TRIG,<job>,<pose>",
+                                                t.jobId, triggerSourceName(t.source)));
+  // 1. grab
+  const auto grabStart = Clock::now();
+  auto g = camera_.grab(frame_, deadline - milliseconds(kProcessingReserveMs));
+  r.grabMs = msSince(grabStart);
+  if (!g) return end(Status::CameraError, g.error().message);
+  r.frameId = frame_.frameId;
+  if (!frame_.depth())
+    return end(Status::BadArgument, fmt::format("job {} is a 3D job and camera '{}' delivered a 2D frame (not Coord3D_C16)",
+                                                t.jobId, cell_.camera.name));
+  DepthIntrinsics k = frame_.intrinsics;
+  if (k.width == 0 && k.height == 0) {
+    k.width = frame_.width;
+    k.height = frame_.height;
+  }
+  if (!(k.fx > 0 && k.fy > 0) || k.width != frame_.width || k.height != frame_.height)
+    return end(Status::CameraError, fmt::format("job {}: the depth frame's intrinsics (f {} / {} px, {}x{} px) do not fit "
+                                                "its {}x{} px",
+                                                t.jobId, k.fx, k.fy, k.width, k.height, frame_.width, frame_.height));
+  // 2. locate (z in mm, 0 = no data; the Locator3d bounds its threads by the job's search.threads)
+  const auto locateStart = Clock::now();
+  const cv::Mat depth(frame_.height, frame_.width, CV_32FC1, frame_.data.data());
+  auto found = job.locator3d->locate(depth, k);
+  r.locateMs = msSince(locateStart);
+  if (!found) return end(found.error().code, fmt::format("job {}: {}", t.jobId, found.error().message));
+
+  // 3. map: T_base_grasp = T_base_cam * T_cam_grasp, all six degrees of freedom.
+  const Pose baseFromCam = depthFrame_->baseFromCamera(t.flange ? &*t.flange : nullptr);
+  r.reference = job.rules.reference;
+  r.parts.clear();
+  for (const auto& part : found->parts) {
+    PartResult p;
+    p.pose = compose(baseFromCam, part.grasp);
+    p.offset = compose(inverse(r.reference), p.pose);
+    // Where the grasp point is in the depth image (x right, y down).
+    if (part.grasp.z > 0) {
+      p.uPx = k.cx + k.fx * part.grasp.x / part.grasp.z;
+      p.vPx = k.cy + k.fy * part.grasp.y / part.grasp.z;
+    }
+    p.score = part.score;
+    r.parts.push_back(p);
+  }
+  setApartOutsideLimits(job.limits, r);
+  using vision::cloud::Outcome3d;
+  r.status = !r.parts.empty()                                         ? Status::Ok
+             : !r.rejected.empty()                                    ? Status::OffsetOutOfLimits
+             : found->outcome == Outcome3d::RetryFromNewViewpoint     ? Status::RetryNewViewpoint
+                                                                      : Status::NoPartFound;
+  // Why a 3D cycle found nothing (one line per such cycle, as vgrd logs every status but OK;
+  // a 3D cycle takes seconds, so this is no hot-path logging).
+  if (r.status == Status::RetryNewViewpoint || r.status == Status::NoPartFound)
+    log::info("cycle", "cycle {}: job {}: {} ({}; {} scene points, {} candidates, best other fitness {:.2f})", t.cycleId,
+              t.jobId, vision::cloud::outcomeName(found->outcome), found->reason, found->scenePoints, found->candidates,
+              found->bestOtherFitness);
+  r.totalMs = msSince(t.at);
+  if (Clock::now() > deadline)
+    return end(Status::ProcessingTimeout, fmt::format("finished after its {} ms deadline", cell_.cycleDeadlineMs));
+  return r;
+}
+
 CycleResult CycleRunner::runCycle(const Trigger& t, cv::Mat& shown) {
   CycleResult r;
   r.cycleId = t.cycleId;
@@ -198,18 +312,15 @@ CycleResult CycleRunner::runCycle(const Trigger& t, cv::Mat& shown) {
   r.flange = t.flange;
   r.triggerTime = t.wallAt;
   const auto deadline = t.at + milliseconds(cell_.cycleDeadlineMs);
-  auto end = [&](Status status, const std::string& why) {
-    r.status = status;
-    r.parts.clear();
-    r.rejected.clear();
-    r.totalMs = msSince(t.at);
-    log::warn("cycle", "cycle {}: {}", t.cycleId, why);
-    return r;
-  };
+  auto end = [&](Status status, const std::string& why) { return ended(std::move(r), t, status, why); };
 
   const auto job = jobs_.find(t.jobId);
   if (job == jobs_.end()) return end(Status::JobNotFound, fmt::format("job {} is not configured", t.jobId));
-  if (!mapping_) return end(Status::NotCalibrated, fmt::format("job {}: NOT_CALIBRATED: {}", t.jobId, calibrationError_));
+  if (!mapping_ && !depthFrame_)
+    return end(Status::NotCalibrated, fmt::format("job {}: NOT_CALIBRATED: {}", t.jobId, calibrationError_));
+  if (job->second.locator3d) return runCycle3d(t, job->second, std::move(r));
+  if (!mapping_)  // a 2D job on a depth camera's cell (the config refuses it; a safety net)
+    return end(Status::BadArgument, fmt::format("job {}: a 2D method on a depth camera's cell", t.jobId));
   // An eye-in-hand camera moves with the robot: without the flange pose of this image there
   // is no mapping (a PLC or operator trigger, or a robot's TRIG without its pose).
   if (mapping_->eyeInHand() && !t.flange)
@@ -260,16 +371,7 @@ CycleResult CycleRunner::runCycle(const Trigger& t, cv::Mat& shown) {
   // 3. map (eye-in-hand: through the snapshot's mapping)
   r.reference = job->second.rules.reference;
   r.parts = vision::partPoses(found->parts, mapping, job->second.rules);
-  if (!job->second.limits.empty()) {
-    // Parts outside the job's limits are set apart (journal only), keeping the order.
-    std::size_t kept = 0;
-    for (std::size_t i = 0; i < r.parts.size(); ++i) {
-      std::string why = limitViolation(job->second.limits, r.parts[i].pose, r.parts[i].offset);
-      if (why.empty()) r.parts[kept++] = r.parts[i];
-      else r.rejected.push_back({r.parts[i], std::move(why)});
-    }
-    r.parts.resize(kept);
-  }
+  setApartOutsideLimits(job->second.limits, r);
   r.status = !r.parts.empty() ? Status::Ok : r.rejected.empty() ? Status::NoPartFound : Status::OffsetOutOfLimits;
   if (r.status == Status::OffsetOutOfLimits)
     log::warn("cycle", "cycle {}: OFFSET_OUT_OF_LIMITS: {} part(s) found, none within job {}'s limits ({})", t.cycleId,

@@ -10,6 +10,13 @@
 // Every job is a Locator (a taught job's method from its folder; an untaught job the
 // blob-moments locator from its cell-config keys), built at start; the pixel -> robot
 // mapping is the one the cell config selects (daemon/cell_mapping.hpp).
+// A 3D job (kind: 3d, a depth camera; docs/3d.md "vgrd") is a vision::cloud::Locator3d:
+//   grab    the depth frame (float mm + the intrinsics the camera sent with it)
+//   locate  Locator3d::locate() -> T_cam_grasp per part, outcome Found / NotFound (1) /
+//           RetryFromNewViewpoint (4 RETRY_NEW_VIEWPOINT)
+//   map     T_base_grasp = T_base_cam * T_cam_grasp, T_base_cam from the hand-eye file
+//           (eye-in-hand: T_base_flange of the trigger * T_flange_cam), all six DoF; limits
+//   deliver as for 2D (the sinks get no image: a depth frame is no gray picture)
 // Triggers come from any thread through submit() (non-blocking, bounded queue); cycles run
 // one at a time on the cycle thread; every accepted trigger produces exactly one
 // CycleResult, by its deadline (an error status when the camera or vision cannot finish).
@@ -31,8 +38,10 @@
 #include "config/cell_config.hpp"
 #include "core/cycle.hpp"
 #include "core/heartbeat.hpp"
+#include "daemon/cell_mapping.hpp"
 #include "drivers/camera_worker.hpp"
 #include "vision/calib/pixel_mapping.hpp"
+#include "vision/cloud/locator3d.hpp"
 #include "vision/locate/locator.hpp"
 #include "vision/part_poses.hpp"
 
@@ -61,7 +70,8 @@ class CycleRunner {
   ~CycleRunner();
 
   // Start-up, before start(): builds every job's locator (a folder: job.yaml, template,
-  // vision::makeLocator; no folder: the untaught moments locator) and warms it up once.
+  // vision::makeLocator; no folder: the untaught moments locator) and warms it up once; a 3D
+  // job's Locator3d (makeJobLocator3d: its model's features, no warm-up image).
   // Errors name the job folder's file and what is wrong.
   Result<void> prepareJobs();
   void start();
@@ -107,6 +117,11 @@ class CycleRunner {
   // image: set to the image the locator was given (a view of frame_ or the converted
   // Mono16 frame) once a frame of the right size was grabbed; left empty otherwise.
   CycleResult runCycle(const Trigger& t, cv::Mat& image);
+  struct PreparedJob;
+  // The rest of runCycle for a 3D job, after the job and calibration checks.
+  CycleResult runCycle3d(const Trigger& t, PreparedJob& job, CycleResult r);
+  // r ended with `status` (no parts), its time taken, `why` logged as a warning.
+  static CycleResult ended(CycleResult r, const Trigger& t, Status status, const std::string& why);
 
   const config::CellConfig& cell_;
   drivers::CameraWorker& camera_;
@@ -114,6 +129,8 @@ class CycleRunner {
   // The cell's pixel -> robot mapping, or why it cannot be had (then every job answers
   // NOT_CALIBRATED with that message).
   std::unique_ptr<vision::calib::PixelMapping> mapping_;
+  // A depth camera's cell maps 3D poses with this instead (mapping_ stays null).
+  std::optional<DepthCellFrame> depthFrame_;
   std::string calibrationError_;
   std::unique_ptr<DriftMonitor> drift_;  // null without calibration.drift
   std::thread thread_;
@@ -127,7 +144,8 @@ class CycleRunner {
   Heartbeat heartbeat_;
   drivers::Frame frame_;
   struct PreparedJob {
-    std::unique_ptr<vision::Locator> locator;
+    std::unique_ptr<vision::Locator> locator;            // a 2D job
+    std::unique_ptr<vision::cloud::Locator3d> locator3d; // a 3D job (job.depth)
     vision::PartPoseRules rules;
     JobLimits limits;
   };

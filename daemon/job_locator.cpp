@@ -5,10 +5,12 @@
 #include <fmt/core.h>
 #include <opencv2/core.hpp>
 
+#include "config/job3d.hpp"
 #include "vision/classify/classifying_locator.hpp"
 #include "vision/classify/part_classifier.hpp"
 #include "vision/gray_image.hpp"
 #include "vision/locate/moments_locator.hpp"
+#include "vision/ply_file.hpp"
 
 namespace vgr::daemon {
 
@@ -29,6 +31,10 @@ Result<std::unique_ptr<vision::Locator>> makeJobLocator(const config::JobFile& j
 }
 
 Result<std::unique_ptr<vision::Locator>> makeJobLocator(const config::JobConfig& job) {
+  if (job.depth)
+    return fail(Status::BadArgument, fmt::format("job {} ({}) is a 3D job (kind: 3d): it locates in depth frames, not "
+                                                 "in gray images",
+                                                 job.id, job.folder));
   if (job.folder.empty()) {
     // Untaught: the blob-moments method with the job's keys in the cell config.
     vision::MomentsParams params;
@@ -44,6 +50,17 @@ Result<std::unique_ptr<vision::Locator>> makeJobLocator(const config::JobConfig&
   return std::move(*loc);
 }
 
+Result<std::unique_ptr<vision::cloud::Locator3d>> makeJobLocator3d(const config::JobConfig& job) {
+  auto why = [&](const Error& e) { return fail(Status::BadArgument, fmt::format("job {} ({}): {}", job.id, job.folder, e.message)); };
+  auto jf = config::loadJob3d(job.folder);
+  if (!jf) return why(jf.error());
+  auto model = vision::readPlyCloud(jf->modelPath());
+  if (!model) return why(model.error());
+  auto loc = vision::cloud::makeLocator3d(*model, jf->grasp, jf->search);
+  if (!loc) return fail(Status::BadArgument, fmt::format("job {} ({}): {}: {}", job.id, job.folder, jf->modelPath(), loc.error().message));
+  return std::move(*loc);
+}
+
 vision::OverlayJob overlayJobFor(const config::JobFile& job) {
   vision::OverlayJob o;
   o.searchRoi = job.taught.searchRoi;
@@ -55,7 +72,7 @@ vision::OverlayJob overlayJobFor(const config::JobFile& job) {
 }
 
 vision::OverlayJob overlayJobFor(const config::JobConfig& job) {
-  if (job.folder.empty()) return {};
+  if (job.folder.empty() || job.depth) return {};
   auto jf = config::loadJob(job.folder);
   return jf ? overlayJobFor(*jf) : vision::OverlayJob{};
 }

@@ -5,7 +5,10 @@
 //     has a `classify:` section, wrapped in the part classifier
 //     (vision/classify/classifying_locator.hpp, paper 002) so every detection carries a
 //     label and its confidence;
-//   - a cell job without a folder: the blob-moments locator with its cell-config keys.
+//   - a cell job without a folder: the blob-moments locator with its cell-config keys;
+//   - a 3D job folder (`kind: 3d`, config/job3d.hpp): makeJobLocator3d below, the model cloud
+//     and search parameters given to vision::cloud::makeLocator3d (paper 004; Open3D stays
+//     inside vision/cloud, this header is plain).
 // Start-up code, any one thread; reads the job folder's files.
 #pragma once
 
@@ -15,6 +18,7 @@
 #include "config/cell_config.hpp"
 #include "config/job.hpp"
 #include "core/result.hpp"
+#include "vision/cloud/locator3d.hpp"
 #include "vision/locate/locator.hpp"
 #include "vision/overlay.hpp"
 
@@ -25,8 +29,13 @@ Result<std::unique_ptr<vision::Locator>> makeJobLocator(const config::JobFile& j
 
 // A cell config's job. Errors name the job and its folder: "job 1 (FOLDER): hu: unknown
 // parameter 'x' (FILE:LINE: ...)", "FOLDER/template.png: cannot read the template image", or
-// the job.yaml loader's line.
+// the job.yaml loader's line; a 3D job (job.depth) is refused (it has makeJobLocator3d).
 Result<std::unique_ptr<vision::Locator>> makeJobLocator(const config::JobConfig& job);
+
+// A cell config's 3D job (job.depth): FOLDER/job.yaml (loadJob3d) and its model.ply, the
+// locator built (the model's features computed: seconds for a dense model). Errors
+// (Status::BadArgument) name the job and the file: "job 3 (FOLDER): FOLDER/model.ply: ...".
+Result<std::unique_ptr<vision::cloud::Locator3d>> makeJobLocator3d(const config::JobConfig& job);
 
 // What the overlay picture (vision/overlay.hpp) draws of a job: its search ROI, and its
 // template's size and grasp point (the found part's outline). A job without a folder has

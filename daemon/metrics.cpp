@@ -19,7 +19,7 @@ namespace vgr::daemon {
 namespace {
 
 constexpr Status kStatuses[] = {Status::Ok,          Status::NoPartFound,       Status::ResultNotReady,
-                                Status::NoNewTrigger, Status::UnknownCommand,    Status::BadArgument,
+                                Status::NoNewTrigger, Status::RetryNewViewpoint, Status::UnknownCommand,    Status::BadArgument,
                                 Status::BusyOverrun,  Status::CameraError,       Status::ProcessingTimeout,
                                 Status::NotCalibrated, Status::JobNotFound,      Status::Internal,
                                 Status::OffsetOutOfLimits};

@@ -137,6 +137,15 @@ Result<DepthScene> renderDepthScene(const DepthSceneOptions& o, std::uint64_t in
   if (o.cameraTiltMaxDeg < 0 || o.cameraTiltMaxDeg > 30) return fail(Status::BadArgument, "camera tilt: expected [0, 30] deg");
   if (o.occlusion < 0 || o.occlusion > 0.95) return fail(Status::BadArgument, "occlusion: expected [0, 0.95]");
   const DepthPart part = *depthPart(o.part);
+  const StableFace* onlyFace = nullptr;
+  if (!o.face.empty()) {
+    std::string names;
+    for (const auto& f : part.stableFaces) {
+      if (f.name == o.face) onlyFace = &f;
+      names += (names.empty() ? "" : ", ") + f.name;
+    }
+    if (!onlyFace) return fail(Status::BadArgument, "face '" + o.face + "': the " + o.part + " rests on " + names);
+  }
 
   std::mt19937_64 rng(o.seed * 0xD1B54A32D192ED03ull + index * 0x94D049BB133111EBull + 77);
   std::uniform_real_distribution<double> u01(0, 1);
@@ -148,6 +157,13 @@ Result<DepthScene> renderDepthScene(const DepthSceneOptions& o, std::uint64_t in
   const Eigen::Vector3d tiltAxis(horizontalAxis(rng));
   const double camTilt = o.cameraTiltMaxDeg * kDeg * u01(rng);
   camFromBin = Iso(Eigen::AngleAxisd(camTilt, tiltAxis)) * camFromBin;
+  {
+    // options.view: the same scene from the camera moved to T_cam_view.
+    Iso camFromView = Iso::Identity();
+    camFromView.linear() = Eigen::Quaterniond(o.view.qw, o.view.qx, o.view.qy, o.view.qz).normalized().toRotationMatrix();
+    camFromView.translation() = V3(o.view.x, o.view.y, o.view.z);
+    camFromBin = camFromView.inverse() * camFromBin;
+  }
 
   // The bin: 380 x 280 mm floor, 8 mm walls 100 mm high, standing on a wider table.
   const double hx = o.bin ? 190 : 300, hy = o.bin ? 140 : 220;
@@ -166,7 +182,8 @@ Result<DepthScene> renderDepthScene(const DepthSceneOptions& o, std::uint64_t in
   const bool empty = u01(rng) < o.emptyRatio;
   const int wanted = empty ? 0 : o.partsPerScene;
   for (int k = 0; k < wanted; ++k) {
-    const auto& face = part.stableFaces[static_cast<std::size_t>(rng() % part.stableFaces.size())];
+    const auto& drawn = part.stableFaces[static_cast<std::size_t>(rng() % part.stableFaces.size())];
+    const auto& face = onlyFace ? *onlyFace : drawn;  // drawn either way: the scenes' random sequence stays
     const double yaw = 2 * M_PI * u01(rng);
     const double tilt = o.tiltMaxDeg * kDeg * u01(rng);
     const V3 axis = horizontalAxis(rng);

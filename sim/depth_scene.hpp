@@ -40,6 +40,13 @@ struct DepthSceneOptions {
   // [0, 0.95]: a board held above the first part hides this share of the pixels the part
   // covers (the "mostly hidden part" scene); 0 = none.
   double occlusion = 0;
+  // Every part rests on this stable face ("-z": its natural one, as depth_parts.hpp names
+  // them); "" = any stable face, drawn per part.
+  std::string face;
+  // Another viewpoint of the same scene (eye-in-hand snapshots): the camera moved to T_cam_view
+  // in the frame of the camera the scene is drawn for; the scene itself does not change.
+  // Identity: that camera. Truth is given in the moved camera's frame.
+  Pose view;
   std::uint64_t seed = 1;
 };
 

@@ -102,3 +102,47 @@ TEST(demo, AnUnknownMethodIsNamed) {
 }
 
 }  // namespace
+
+namespace {
+
+// `vgr demo --3d` (issue 14): the simulated 3D cell — depth camera emulator over GigE Vision,
+// vgrd with the example 3D job and the depth hand-eye, the PLC and the UR, ABB (quaternion)
+// and FANUC robot simulators. Every pose delivered is within 1 mm and 1 deg of the
+// renderer's truth in the robot base frame (through the TRUE camera pose: the calibration's
+// error counts), every robot reply is well-formed and equal to the journal in six DoF.
+// The localizer's recall is not 100 % today (docs/demo.md "3D", docs/3d.md "Measured"): a
+// cycle without a pose must be a typed 1 NO_PART_FOUND / 4 RETRY_NEW_VIEWPOINT, never a
+// wrong pose; the demo's exit code is 0 only at N/N, so this test reads the figures instead.
+TEST(demo, ThreeDCellDeliversSixDofPosesWithinOneMillimetreAndOneDegree) {
+  const DemoRun r = demo("--3d --cycles 5");
+  const auto s = summary(r.out);
+  ASSERT_TRUE(s.is_object()) << r.out;
+  EXPECT_TRUE(r.rc == 0 || r.rc == 1) << r.out;
+  EXPECT_GE(s["ok"].get<int>(), 1) << r.out;
+  EXPECT_LE(s["max_pos_err_mm"].get<double>(), 1.0) << r.out;
+  EXPECT_LE(s["max_angle_err_deg"].get<double>(), 1.0) << r.out;
+  EXPECT_TRUE(s["within_bounds"].get<bool>()) << r.out;
+  int cycles = 0;
+  for (const auto& [code, n] : s["statuses"].items()) {
+    EXPECT_TRUE(code == "0" || code == "1" || code == "4") << "a cycle ended " << code << ": " << r.out;
+    cycles += n.get<int>();
+  }
+  EXPECT_EQ(cycles, 5) << "every cycle answered: " << r.out;
+  // Three robots, every reply well-formed and equal to the journal.
+  for (const char* robot : {"ur5", "irb", "lrmate"}) {
+    const std::string line = std::string("robot ") + robot + ":";
+    const auto at = r.out.find(line);
+    ASSERT_NE(at, std::string::npos) << r.out;
+    const std::string l = r.out.substr(at, r.out.find('\n', at) - at);
+    EXPECT_NE(l.find(" 0 malformed"), std::string::npos) << l;
+    EXPECT_NE(l.find(" 0 not matching the journal"), std::string::npos) << l;
+  }
+}
+
+TEST(demo, ThreeDRefusesTheOptionsOfThe2dCell) {
+  const DemoRun r = demo("--3d --cycles 1 --method shape");
+  EXPECT_EQ(r.rc, 2) << r.out;
+  EXPECT_NE(r.out.find("--3d runs the embedded"), std::string::npos) << r.out;
+}
+
+}  // namespace

@@ -26,6 +26,7 @@
 
 #include "core/pose.hpp"
 #include "sim/scene.hpp"
+#include "tests/support/handeye_file.hpp"
 #include "tests/support/raw_tcp_client.hpp"
 #include "tests/support/sim_cell.hpp"
 #include "vision/calib/handeye.hpp"
@@ -134,18 +135,8 @@ class eye_in_hand : public vgr::test::SimCell {
     cam.imageSize = cv::Size(kWidth, kHeight);
     cam.rmsPx = 0.05;
     ASSERT_TRUE(calib::writeIntrinsics((dir_ / "eih/intrinsics.yaml").string(), cam));
-    calib::HandEyeResult he;
-    he.config = calib::HandEyeConfig::EyeInHand;
-    calib::HandEyeMethodResult m;
-    m.method = "truth";
-    m.valid = true;
-    m.x = kFlangeFromCam;
-    m.transResidMm = 0.05;
-    m.rotResidDeg = 0.01;
-    m.reprojRmsPx = 0.1;
-    he.methods.push_back(m);
-    he.best = 0;
-    ASSERT_TRUE(calib::writeHandEye((dir_ / "eih/handeye.yaml").string(), he));
+    ASSERT_TRUE(vgr::test::writeTruthHandEye((dir_ / "eih/handeye.yaml").string(), calib::HandEyeConfig::EyeInHand,
+                                             kFlangeFromCam));
     ASSERT_TRUE(calib::writeWorkPlane((dir_ / "eih/plane.yaml").string(), calib::WorkPlane{}, "points"));
     // One image per flange pose, the same part on the belt.
     vgr::sim::SceneTruth truth;

@@ -378,6 +378,22 @@ TEST_F(modbus_map, NoPartFoundIsNotAnError) {
   EXPECT_FALSE(bit(kStatusTriggerAck));
 }
 
+// A 3D job's RETRY_NEW_VIEWPOINT (docs/3d.md "Outcomes"): a valid result without a part,
+// ERROR_CODE 4, and not an error (nothing is broken: move the camera and trigger again).
+TEST_F(modbus_map, RetryNewViewpointIsAResultWithoutAPartAndNotAnError) {
+  map.setReady(true);
+  writeHr(kControl, kControlTrigger);
+  ModbusResult r;
+  r.cycleId = 70001;
+  r.status = Status::RetryNewViewpoint;
+  map.publishResult(r);
+  EXPECT_TRUE(bit(kStatusResultValid));
+  EXPECT_FALSE(bit(kStatusPartFound));
+  EXPECT_FALSE(bit(kStatusError));
+  EXPECT_EQ(map.input(kErrorCode), 4);
+  EXPECT_EQ(map.input(kNumFound), 0);
+}
+
 TEST_F(modbus_map, RefusedTriggerEndsWithErrorResult) {
   map.setReady(true);
   writeHr(kControl, kControlTrigger);

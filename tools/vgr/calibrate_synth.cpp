@@ -107,7 +107,8 @@ int synthCell(const CalibSynthOptions& o, const calib::PatternSpec& spec) {
 // cameras"): camera.yaml (3D data-set format), target.yaml, images/pose_NNN.png (16-bit z),
 // poses.txt naming them, truth.yaml.
 int synthHandEyeCloud(const CalibSynthOptions& o, calib::HandEyeConfig cfg) {
-  const sim::DepthCamera cam = sim::defaultDepthCamera();
+  sim::DepthCamera cam = sim::defaultDepthCamera();
+  if (o.depthFocalPx > 0) cam.intrinsics.fx = cam.intrinsics.fy = o.depthFocalPx;  // e.g. the 3D scenes' camera (800 px)
   const auto target = sim::defaultSphereTarget();
   const auto footprint = sim::sphereTargetFootprint();
   sim::TrueCamera plateCam;  // the depth camera as the view generator wants it (no distortion)
@@ -200,6 +201,8 @@ CLI::App* CalibrateSynthCommand::add(CLI::App& parent) {
                         "cell's camera)");
   calSynCmd->add_option("--depth-noise-mm", calSyn.depthNoiseMm, "handeye-cloud: Gaussian depth noise per pixel, mm")
       ->check(CLI::Range(0.0, 10.0));
+  calSynCmd->add_option("--depth-focal", calSyn.depthFocalPx, "handeye-cloud: the depth camera's focal length, px (default 570)")
+      ->check(CLI::Range(100.0, 5000.0));
   calSynCmd->add_option("--cell", calSyn.cellConfig, "cell config for --kind cell (default: the embedded sim cell)");
   calSynCmd->add_option("--out", calSyn.out, "folder to write")->required();
   calSynCmd->add_option("--configuration", calSyn.configuration, "eye-in-hand or eye-to-hand (handeye)");

@@ -24,6 +24,7 @@ struct CalibSynthOptions {
   double maxTiltDeg = 40, distanceMm = 420;
   double partialShare = 0;             // share of views with the plate partly outside the image (charuco)
   double depthNoiseMm = 0.3;           // handeye-cloud: Gaussian depth noise per pixel, mm
+  double depthFocalPx = 0;             // handeye-cloud: the depth camera's focal length, px (0: sim::defaultDepthCamera's)
 };
 
 int runCalibrateSynth(const CalibSynthOptions& o);

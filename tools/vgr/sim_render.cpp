@@ -130,6 +130,7 @@ CLI::App* SimRenderCommand::add(CLI::App& parent) {
   only3d_.push_back(c->add_option("--camera-tilt-max", s.cameraTiltMaxDeg, "3D: camera tilted from straight down by up to DEG (default 5)")
                         ->check(CLI::Range(0.0, 30.0)));
   only3d_.push_back(c->add_flag("!--no-bin", s.bin, "3D: parts on a table instead of in a bin"));
+  only3d_.push_back(c->add_option("--face", s.face, "3D: every part rests on this stable face (e.g. -z, its natural one; default any)"));
   only3d_.push_back(c->add_option("--occlusion", s.occlusion, "3D: a board hides this share of the first part's pixels (default 0)")
                         ->check(CLI::Range(0.0, 0.95)));
   only3d_.push_back(c->add_option("--views", z.views, "3D: model-building views of the part alone on a table (default 12, 0 = none)")
