@@ -6,6 +6,7 @@
 //   vgr calibrate intrinsics|handeye|plane|synth ...   calibration (docs/calibration.md)
 //   vgr sim render | teach | locate | eval   localization datasets, jobs, runs (docs/localization.md)
 //   vgr classify train | eval   paper 002's part classifier (docs/classification.md)
+//   vgr grasp detect | tensors  grasp detection in depth images (docs/grasp.md; scored by vgr eval --grasp)
 #include <map>
 #include <memory>
 #include <string>
@@ -26,6 +27,7 @@
 #include "tools/vgr/demo.hpp"
 #include "tools/vgr/eval.hpp"
 #include "tools/vgr/grab.hpp"
+#include "tools/vgr/grasp.hpp"
 #include "tools/vgr/locate.hpp"
 #include "tools/vgr/sim_render.hpp"
 #include "tools/vgr/subcommand.hpp"
@@ -44,6 +46,7 @@ constexpr Group kGroups[] = {
     {"calibrate", "camera intrinsics, hand-eye, synthetic calibration data"},
     {"sim", "simulation tools"},
     {"classify", "part classifier of paper 002: train, eval (docs/classification.md)"},
+    {"grasp", "grasp detection in depth images (paper 003): detect, tensors (docs/grasp.md)"},
 };
 
 struct Entry {
@@ -75,6 +78,8 @@ int main(int argc, char** argv) {
       {nullptr, std::make_unique<tools::EvalCommand>()},
       {"classify", std::make_unique<tools::ClassifyTrainCommand>()},
       {"classify", std::make_unique<tools::ClassifyEvalCommand>()},
+      {"grasp", std::make_unique<tools::GraspDetectCommand>()},
+      {"grasp", std::make_unique<tools::GraspTensorsCommand>()},
   };
 
   std::map<std::string, CLI::App*> groups;  // added when their first member is
