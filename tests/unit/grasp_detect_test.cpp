@@ -96,7 +96,19 @@ TEST(grasp_input, HeightsOverFiftyMillimetresAtHalfResolutionPaddedToTheStride) 
   const DepthFrame f = blockFrame();
   auto floor = fitFloorPlane(f.zMm, f.camera, f.name);
   ASSERT_TRUE(floor);
-  EXPECT_DOUBLE_EQ(netScale(f.camera, *floor), 0.5);  // 560 mm / 800 px / 1.4 mm per px
+  const auto scale = netScale(f.camera, *floor, f.name);
+  ASSERT_TRUE(scale) << scale.error().message;
+  EXPECT_DOUBLE_EQ(*scale, 0.5);  // 560 mm / 800 px / 1.4 mm per px
+  // A camera that sees the floor at 5.6 mm per px (or 0.1): no input at 1.4 mm per px.
+  DepthIntrinsics coarse = f.camera, fine = f.camera;
+  coarse.fx = coarse.fy = 100;
+  fine.fx = fine.fy = 4000;
+  for (const auto& cam : {coarse, fine}) {
+    const auto refused = netScale(cam, *floor, f.name);
+    ASSERT_FALSE(refused);
+    EXPECT_EQ(refused.error().message.rfind(f.name + ": the floor is 560 mm away at f = ", 0), 0u) << refused.error().message;
+    EXPECT_NE(refused.error().message.find("outside [1/8, 1]"), std::string::npos) << refused.error().message;
+  }
   const NetInput in = makeNetInput(heightAboveFloor(f.zMm, f.camera, *floor), 0.5);
   EXPECT_EQ(in.rows, 240);
   EXPECT_EQ(in.cols, 320);
@@ -253,6 +265,7 @@ TEST(grasp_ggcnn, ADepthImageOfTheWrongSizeOrTypeIsOneLineNamingIt) {
 }
 
 TEST(grasp_ggcnn, TheCommittedModelIsSmallAndFindsGraspsOnHeldOutScenes) {
+  ASSERT_TRUE(std::filesystem::is_regular_file(kModel)) << kModel << ": the committed model is missing";
   ASSERT_LE(std::filesystem::file_size(kModel), 1u << 20) << "the model file must stay <= 1 MB";
   GraspDetectorOptions o;
   o.modelPath = kModel;

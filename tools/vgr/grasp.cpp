@@ -151,6 +151,7 @@ int runGraspTensors(const GraspTensorsOptions& o) {
   if (ec) return badInput(fmt::format("{}: cannot create: {}", o.out, ec.message()));
   std::size_t n = set->images.size();
   if (o.limit > 0) n = std::min(n, static_cast<std::size_t>(o.limit));
+  if (n == 0) return badInput(o.dataset + ": no images in grasps.csv");
 
   NpyWriter input, target;
   std::ofstream names(fs::path(o.out) / "images.txt");
@@ -161,7 +162,9 @@ int runGraspTensors(const GraspTensorsOptions& o) {
     if (!frame) return badInput(frame.error().message);
     auto floor = vg::fitFloorPlane(frame->zMm, frame->camera, frame->name);
     if (!floor) return badInput(floor.error().message);
-    const vg::NetInput in = vg::makeNetInput(vg::heightAboveFloor(frame->zMm, frame->camera, *floor), vg::netScale(frame->camera, *floor));
+    const auto scale = vg::netScale(frame->camera, *floor, frame->name);
+    if (!scale) return badInput(scale.error().message);
+    const vg::NetInput in = vg::makeNetInput(vg::heightAboveFloor(frame->zMm, frame->camera, *floor), *scale);
     if (i == 0) {
       rows = in.tensor.rows, cols = in.tensor.cols;
       const int N = static_cast<int>(n);
@@ -185,6 +188,8 @@ int runGraspTensors(const GraspTensorsOptions& o) {
   }
   if (auto r = input.close(); !r) return badInput(r.error().message);
   if (auto r = target.close(); !r) return badInput(r.error().message);
+  names.close();
+  if (!names) return badInput((fs::path(o.out) / "images.txt").string() + ": cannot write");
   std::printf("{\"out\":\"%s\",\"images\":%zu,\"rows\":%d,\"cols\":%d}\n", o.out.c_str(), n, rows, cols);
   return 0;
 }

@@ -3,6 +3,8 @@
 #include <filesystem>
 #include <map>
 
+#include <fmt/core.h>
+
 #include "config/depth_dataset.hpp"
 #include "vision/depth_image.hpp"
 
@@ -24,6 +26,10 @@ Result<GraspDataset> loadGraspDataset(const std::string& folder) {
   if (!rows) return std::unexpected(rows.error());
   std::map<std::string, std::size_t> index;
   for (auto& r : *rows) {
+    // A true rectangle's centre outside the camera's image is a data set for another camera.
+    if (r.hasGrasp && !(r.u >= 0 && r.v >= 0 && r.u <= set.camera.width - 1 && r.v <= set.camera.height - 1))
+      return fail(Status::BadArgument, fmt::format("{}:{}: grasp centre ({}, {}) px lies outside the {}x{} image of camera.yaml", csv, r.line, r.u,
+                                                   r.v, set.camera.width, set.camera.height));
     auto [it, added] = index.emplace(r.image, set.images.size());
     if (added) set.images.push_back({r.image, {}});
     if (r.hasGrasp) set.images[it->second].grasps.push_back(std::move(r));

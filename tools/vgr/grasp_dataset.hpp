@@ -25,8 +25,8 @@ struct GraspDataset {
   std::vector<GraspImage> images;
 };
 
-// Errors: camera.yaml's or grasps.csv's (file:line), "DIR/grasps.csv: cannot open" with a
-// hint to render with --grasps.
+// Errors: camera.yaml's or grasps.csv's (file:line; a grasp centre outside camera.yaml's
+// image too), "DIR/grasps.csv: cannot open" with a hint to render with --grasps.
 Result<GraspDataset> loadGraspDataset(const std::string& folder);
 
 // The image's depth in mm (vision/depth_image.hpp's checks: 16-bit, camera.yaml's size).

@@ -72,7 +72,9 @@ class GgcnnDetector final : public GraspDetector {
     auto floor = fitFloorPlane(f.zMm, f.camera, f.name, o_.floor);
     if (!floor) return std::unexpected(floor.error());
     const cv::Mat heights = heightAboveFloor(f.zMm, f.camera, *floor);
-    const NetInput in = makeNetInput(heights, netScale(f.camera, *floor));
+    const auto scale = netScale(f.camera, *floor, f.name);
+    if (!scale) return std::unexpected(scale.error());
+    const NetInput in = makeNetInput(heights, *scale);
 
     cv::Mat out;
     try {

@@ -4,14 +4,21 @@
 #include <cmath>
 #include <limits>
 
+#include <fmt/core.h>
 #include <opencv2/imgproc.hpp>
 
 namespace vgr::vision::grasp {
 
-double netScale(const DepthIntrinsics& camera, const FloorPlane& floor) {
-  const double s = floor.depthAtPrincipalPoint() / camera.fx / kNetMmPerPx;
+Result<double> netScale(const DepthIntrinsics& camera, const FloorPlane& floor, const std::string& name) {
+  const double z = floor.depthAtPrincipalPoint();
+  const double raw = z / camera.fx / kNetMmPerPx;
   // Rounded to 1/32: the input size stays the same when the floor moves by a few mm.
-  return std::clamp(std::isfinite(s) ? std::round(s * 32) / 32 : 1.0, 0.125, 1.0);
+  const double s = std::round(raw * 32) / 32;
+  if (!std::isfinite(s) || s < 0.125 || s > 1)
+    return fail(Status::BadArgument, fmt::format("{}: the floor is {:.0f} mm away at f = {:.0f} px ({:.2f} mm per px): the grasp network's "
+                                                 "input at {} mm per px would need a scale of {:.3f}, outside [1/8, 1]",
+                                                 name, z, camera.fx, z / camera.fx, kNetMmPerPx, raw));
+  return s;
 }
 
 NetInput makeNetInput(const cv::Mat& heightMm, double scale) {

@@ -15,10 +15,12 @@
 #pragma once
 
 #include <array>
+#include <string>
 #include <vector>
 
 #include <opencv2/core.hpp>
 
+#include "core/result.hpp"
 #include "vision/grasp/height_map.hpp"
 
 namespace vgr::vision::grasp {
@@ -36,8 +38,10 @@ struct NetInput {
 };
 
 // The scale for a floor: floor depth at the principal point / fx / kNetMmPerPx, rounded to
-// 1/32, in [1/8, 1].
-double netScale(const DepthIntrinsics& camera, const FloorPlane& floor);
+// 1/32. Error (Status::BadArgument, `name` first) when it falls outside [1/8, 1]: the camera
+// sees the floor so coarsely (or finely) that the input cannot be made at kNetMmPerPx, and
+// the network would see parts at a size it was not trained on.
+Result<double> netScale(const DepthIntrinsics& camera, const FloorPlane& floor, const std::string& name);
 
 // heightMm: CV_32FC1 (heightAboveFloor()), NaN = no data.
 NetInput makeNetInput(const cv::Mat& heightMm, double scale);
