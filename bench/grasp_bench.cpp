@@ -20,6 +20,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/dnn.hpp>
 
+#include "core/cli.hpp"
 #include "sim/depth_render.hpp"
 #include "sim/depth_scene.hpp"
 #include "vision/grasp/grasp_detector.hpp"
@@ -56,22 +57,25 @@ void measure(Timing& t, F&& f) {
 
 int main(int argc, char** argv) {
   CLI::App app{"vgr-bench-grasp: grasp network and detectors, time on one core"};
+  vgr::cli::showDefaults(app);
   std::string model = "models/grasp/ggcnn.onnx";
   int reps = 50, scenes = 20;
   app.add_option("--model", model, "the grasp network (ONNX)");
   app.add_option("--reps", reps, "forward passes per input size")->check(CLI::Range(1, 100000));
   app.add_option("--scenes", scenes, "rendered scenes per detector (0: the network alone, e.g. under callgrind)")
       ->check(CLI::Range(0, 100000));
-  CLI11_PARSE(app, argc, argv);
+  if (const auto rc = vgr::cli::parse(app, argc, argv)) return *rc;
   cv::setNumThreads(1);
 
-  cv::dnn::Net net;
-  try {
-    net = cv::dnn::readNetFromONNX(model);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "%s: cannot load the grasp network: %s\n", model.c_str(), e.what());
-    return 2;
+  {  // the detector's checks first: one clear line for a file that is not a grasp network
+    vgr::vision::grasp::GraspDetectorOptions o;
+    o.modelPath = model;
+    if (auto d = vgr::vision::grasp::makeGraspDetector(o); !d) {
+      std::fprintf(stderr, "%s\n", d.error().message.c_str());
+      return 2;
+    }
   }
+  cv::dnn::Net net = cv::dnn::readNetFromONNX(model);
   net.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
   net.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
   std::vector<Timing> rows;
@@ -97,7 +101,10 @@ int main(int argc, char** argv) {
   for (int i = 0; i < scenes; ++i) {
     so.part = i % 3 == 0 ? "bracket" : i % 3 == 1 ? "housing" : "lever";
     auto s = vgr::sim::renderDepthScene(so, static_cast<std::uint64_t>(i));
-    if (!s) return 2;
+    if (!s) {
+      std::fprintf(stderr, "scene %d: %s\n", i, s.error().message.c_str());
+      return 1;
+    }
     const auto& c = s->camera;
     frames.push_back({vgr::sim::depthToMm(s->depth, c.depthScaleMm), {c.width, c.height, c.fx, c.fy, c.cx, c.cy}, "scene"});
   }
@@ -113,7 +120,12 @@ int main(int argc, char** argv) {
     }
     (void)(*det)->detect(frames.front());  // warm-up
     Timing t{fmt::format("{} 640x480", name), {}, {}};
-    for (const auto& f : frames) measure(t, [&] { (void)(*det)->detect(f); });
+    int failed = 0;
+    for (const auto& f : frames) measure(t, [&] { failed += !(*det)->detect(f); });
+    if (failed) {
+      std::fprintf(stderr, "%s failed on %d of %zu scenes\n", name, failed, frames.size());
+      return 1;
+    }
     rows.push_back(t);
   }
 

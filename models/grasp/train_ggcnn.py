@@ -25,8 +25,8 @@ so training and inference see the same input). Held-out scenes (other seeds) are
 `vgr eval --grasp` at the end, against the analytic baseline.
 
 Reproduce (CPU only, Debian's python3-torch; figures in docs/grasp.md):
-    nice -n 10 /usr/bin/python3 models/grasp/train_ggcnn.py --vgr build/bin/vgr \
-        --work /tmp/ggcnn-work --out models/grasp/ggcnn.onnx
+    nice -n 19 /usr/bin/python3 models/grasp/train_ggcnn.py --vgr build/bin/vgr \
+        --work /tmp/ggcnn-work --out models/grasp/ggcnn.onnx --threads 1
 Writes the model, OUT with .json (the run's figures) and prints one JSON line at the end.
 """
 import argparse

@@ -94,6 +94,21 @@ TEST_F(GraspCli, ADepthImageOfTheWrongSizeIsOneLineNamingIt) {
   EXPECT_NE(r.out.find("--job is required (or --grasp"), std::string::npos) << r.out;
 }
 
+TEST_F(GraspCli, GraspOptionsWithoutGraspAndJobOptionsWithGraspAreRefused) {
+  // Each would be ignored by the other kind of evaluation: refused by name (exit 2), nothing run.
+  const std::pair<std::string, std::string> cases[] = {
+      {"eval --job " + dir_ + " --dataset " + dir_ + "/set --model " + kModel, "--model requires --grasp"},
+      {"eval --job " + dir_ + " --dataset " + dir_ + "/set --min-iou 0.3", "--min-iou requires --grasp"},
+      {"eval --grasp --detectors analytic --dataset " + dir_ + "/set --job " + dir_, "excludes --grasp"},
+      {"eval --grasp --detectors analytic --dataset " + dir_ + "/set --pos-tol 3", "--pos-tol excludes --grasp"}};
+  for (const auto& [args, why] : cases) {
+    const auto r = runVgr(args);
+    EXPECT_EQ(r.exitCode, 2) << args << "\n" << r.out;
+    EXPECT_NE(r.out.find(why), std::string::npos) << args << "\n" << r.out;
+    EXPECT_EQ(r.out.find("rect_success_rate"), std::string::npos) << args;
+  }
+}
+
 TEST_F(GraspCli, DetectGivesGraspsInTheRobotFrameThroughTheThreeDCalibration) {
   // T_base_cam: the camera 700 mm above the base origin looking down, turned 30 deg.
   const double c = std::cos(M_PI / 6), s = std::sin(M_PI / 6);
