@@ -264,6 +264,42 @@ TEST(grasp_ggcnn, ADepthImageOfTheWrongSizeOrTypeIsOneLineNamingIt) {
   }
 }
 
+// tests/fixtures/height_as_quality.onnx: quality = the input (height / 50 mm), cos 2 theta = 1,
+// sin 2 theta = 0, width 20 network px: its best peak is the highest point. A 100 mm bar (a
+// bin wall) next to the 20 mm block: the wall outbids the block, and the detector must drop
+// it for standing higher than maxObjectHeightMm (80 mm), keeping the block.
+TEST(grasp_ggcnn, AGraspHigherThanAnyPartStandsIsDropped) {
+  const sim::TriMesh floor = box({-400, -300, -10}, {400, 300, 0});
+  const sim::TriMesh block = box({-20, -10, 0}, {20, 10, 20});
+  const sim::TriMesh wall = box({-140, 80, 0}, {140, 90, 100});
+  Eigen::Isometry3d binFromBlock = Eigen::Isometry3d::Identity();
+  binFromBlock.translation() = V3(30, -20, 0);
+  sim::DepthCameraModel cam;
+  sim::ExactDepth e;
+  sim::rasterize({{&floor, poseOf(camFromBin()), 0}, {&block, poseOf(camFromBin() * binFromBlock), 1}, {&wall, poseOf(camFromBin()), 2}},
+                 cam, e);
+  const DepthFrame f = frameOf(sim::applySensor(e, cam, {}, 7), cam, "wall");
+  GraspDetectorOptions o;
+  o.modelPath = std::string(VGR_SOURCE_DIR) + "/tests/fixtures/height_as_quality.onnx";
+  o.minQuality = 0.2;
+  for (const double maxHeight : {80.0, 200.0}) {
+    o.maxObjectHeightMm = maxHeight;
+    auto det = makeGraspDetector(o);
+    ASSERT_TRUE(det) << det.error().message;
+    auto g = (*det)->detect(f);
+    ASSERT_TRUE(g) << g.error().message;
+    ASSERT_FALSE(g->empty()) << maxHeight;
+    for (const auto& gr : *g) EXPECT_LE(gr.heightMm, maxHeight + 1e-9);
+    if (maxHeight == 80) {
+      EXPECT_NEAR(g->front().heightMm, 20, 2) << "the block";
+      EXPECT_NEAR(g->front().u, 800 * 30 / 540.0 + 319.5, 12);
+      EXPECT_NEAR(g->front().v, 800 * 20 / 540.0 + 239.5, 12);
+    } else {
+      EXPECT_NEAR(g->front().heightMm, 100, 2) << "without the bound the wall comes first";
+    }
+  }
+}
+
 TEST(grasp_ggcnn, TheCommittedModelIsSmallAndFindsGraspsOnHeldOutScenes) {
   ASSERT_TRUE(std::filesystem::is_regular_file(kModel)) << kModel << ": the committed model is missing";
   ASSERT_LE(std::filesystem::file_size(kModel), 1u << 20) << "the model file must stay <= 1 MB";

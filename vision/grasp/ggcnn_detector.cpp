@@ -140,6 +140,8 @@ class GgcnnDetector final : public GraspDetector {
       g.jawPx = o_.gripper.jawLengthMm * f.camera.fx / g.depthMm;
       const auto pc = backProject(f.camera, g.u, g.v, g.depthMm);
       g.heightMm = floor->nx * pc.x + floor->ny * pc.y + floor->nz * pc.z - floor->offset;
+      // Higher than any part stands: a bin wall or a fixture, as for the analytic detector.
+      if (g.heightMm > o_.maxObjectHeightMm) continue;
       grasps.push_back(g);
     }
     return grasps;

@@ -52,7 +52,8 @@ struct GraspDetectorOptions {
   int maxGrasps = 5;               // [1, 100] at most this many grasps, best first
   Gripper gripper;
   FloorOptions floor;
-  // analytic: what counts as an object above the floor (mm, px at full resolution)
+  // What counts as an object above the floor (mm, px at full resolution). maxObjectHeightMm
+  // is for both detectors (ggcnn: a grasp centre higher than it is dropped); the rest analytic.
   double minObjectHeightMm = 3;    // (0, 1000] pixels at least this high are objects
   double maxObjectHeightMm = 80;   // objects reaching higher are not grasped (bin walls, fixtures)
   int minObjectAreaPx = 150;       // [1, 1e7] smaller blobs are noise
