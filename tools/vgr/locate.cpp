@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <string_view>
@@ -16,21 +17,84 @@
 #include <opencv2/core.hpp>
 
 #include "config/cell_config.hpp"
+#include "config/depth_dataset.hpp"
 #include "config/job.hpp"
+#include "config/job3d.hpp"
 #include "core/status.hpp"
 #include "core/pose.hpp"
 #include "daemon/cell_mapping.hpp"
 #include "daemon/job_locator.hpp"
 #include "tools/vgr/calibrate_common.hpp"
 #include "vision/calib/pixel_mapping.hpp"
+#include "vision/cloud/locator3d.hpp"
+#include "vision/depth_image.hpp"
 #include "vision/gray_image.hpp"
 #include "vision/locate/locator.hpp"
 #include "vision/overlay.hpp"
 #include "vision/part_poses.hpp"
+#include "vision/ply_file.hpp"
 
 namespace vgr::tools {
 
+namespace {
+
+namespace fs = std::filesystem;
+
+nlohmann::ordered_json poseJson(const Pose& p) {
+  return {{"x_mm", p.x}, {"y_mm", p.y}, {"z_mm", p.z}, {"qw", p.qw}, {"qx", p.qx}, {"qy", p.qy}, {"qz", p.qz}};
+}
+
+// A 3D job (docs/3d.md) on one depth image: poses in the camera frame (T_cam_model and the
+// grasp T_cam_grasp), the outcome (found, not_found, retry_new_viewpoint) and its reason.
+int runLocate3d(const LocateOptions& o) {
+  if (!o.method.empty() || !o.flange.empty() || !o.overlay.empty())
+    return badInput("--method, --flange and --overlay are for 2D jobs; " + o.job + " is a 3D job");
+  auto job = config::loadJob3d(o.job);
+  if (!job) return badInput(job.error().message);
+  // The depth camera: --camera, else the data set's camera.yaml (DIR/images/x.png -> DIR).
+  const std::string cameraPath =
+      !o.camera.empty() ? o.camera : (fs::path(o.image).parent_path().parent_path() / "camera.yaml").string();
+  auto camera = config::loadDepthCameraFile(cameraPath);
+  if (!camera) return badInput(camera.error().message + (o.camera.empty() ? " (give the depth camera with --camera)" : ""));
+  auto depth = vision::readDepthMm(o.image, camera->depthScaleMm, camera->width, camera->height);
+  if (!depth) return badInput(depth.error().message);
+  auto model = vision::readPlyCloud(job->modelPath());
+  if (!model) return badInput(model.error().message);
+  auto locator = vision::cloud::makeLocator3d(*model, job->grasp, job->search);
+  if (!locator) return badInput(job->modelPath() + ": " + locator.error().message);
+  const auto t0 = std::chrono::steady_clock::now();
+  auto out = (*locator)->locate(*depth, camera->intrinsics());
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  if (!out) return badInput(o.image + ": " + out.error().message);
+  nlohmann::ordered_json j;
+  j["outcome"] = std::string(vision::cloud::outcomeName(out->outcome));
+  j["reason"] = out->reason;
+  j["time_ms"] = ms;
+  j["parts"] = nlohmann::json::array();
+  for (const auto& part : out->parts)
+    j["parts"].push_back({{"pose", poseJson(part.pose)}, {"grasp", poseJson(part.grasp)}, {"fitness", part.fitness},
+                          {"contradiction", part.contradiction}, {"rmse_mm", part.rmseMm}, {"refined", part.refined}});
+  if (o.json) {
+    std::printf("%s\n", j.dump().c_str());
+    return 0;
+  }
+  std::printf("%s: %s, %zu part(s) in %.0f ms%s\n", o.image.c_str(), j["outcome"].get<std::string>().c_str(),
+              out->parts.size(), ms, out->reason.empty() ? "" : (" (" + out->reason + ")").c_str());
+  for (const auto& part : out->parts) {
+    const Pose& p = part.pose;
+    std::printf("  model in camera: %.2f %.2f %.2f mm  q %.5f %.5f %.5f %.5f  fitness %.3f  RMSE %.3f mm%s\n", p.x, p.y, p.z,
+                p.qw, p.qx, p.qy, p.qz, part.fitness, part.rmseMm, part.refined ? "  (refined)" : "");
+    const Pose& g = part.grasp;
+    std::printf("  grasp in camera: %.2f %.2f %.2f mm  q %.5f %.5f %.5f %.5f\n", g.x, g.y, g.z, g.qw, g.qx, g.qy, g.qz);
+  }
+  return 0;
+}
+
+}  // namespace
+
 int runLocate(const LocateOptions& o) {
+  if (auto kind = config::jobKind(o.job); kind && *kind == "3d") return runLocate3d(o);
+  if (!o.camera.empty()) return badInput("--camera is for 3D jobs (a depth camera's camera.yaml); " + o.job + " is a 2D job");
   auto job = config::loadJob(o.job);
   if (!job) return badInput(job.error().message);
   const std::string method = o.method.empty() ? job->method : o.method;
@@ -150,13 +214,14 @@ int runLocate(const LocateOptions& o) {
 
 CLI::App* LocateCommand::add(CLI::App& parent) {
   auto& l = options_;
-  auto* locateCmd = parent.add_subcommand("locate", "run a job's method on one image");
+  auto* locateCmd = parent.add_subcommand("locate", "run a job's method on one image (a 3D job on one depth image)");
   locateCmd->add_option("--job", l.job, "job folder")->required();
   locateCmd->add_option("--image", l.image, "image file")->required();
   locateCmd->add_option("--method", l.method, "override the job's method");
   locateCmd->add_flag("--json", l.json, "one JSON object: status, time_ms, parts");
   locateCmd->add_option("--flange", l.flange, "eye-in-hand calibration: the image's flange pose x,y,z,qw,qx,qy,qz (mm)");
   locateCmd->add_option("--overlay", l.overlay, "write the image with the parts, grasp points and search ROI drawn on it (PNG)");
+  locateCmd->add_option("--camera", l.camera, "3D job: the depth camera's camera.yaml (default: the image's data set's)");
   return locateCmd;
 }
 

@@ -39,6 +39,7 @@
 #include "tools/vgr/journal_bench.hpp"
 #include "tools/vgr/repeatability.hpp"
 #include "tools/vgr/replay.hpp"
+#include "tools/vgr/model.hpp"
 #include "tools/vgr/sim_render.hpp"
 #include "tools/vgr/soak.hpp"
 #include "tools/vgr/subcommand.hpp"
@@ -58,6 +59,7 @@ constexpr Group kGroups[] = {
     {"sim", "simulation tools"},
     {"classify", "part classifier of paper 002: train, eval (docs/classification.md)"},
     {"grasp", "grasp detection in depth images (paper 003): detect, tensors (docs/grasp.md)"},
+    {"model", "3D part models from depth views: build, eval (docs/3d.md)"},
 };
 
 struct Entry {
@@ -94,6 +96,8 @@ int main(int argc, char** argv) {
       {nullptr, std::make_unique<tools::ReplayCommand>()},
       {"classify", std::make_unique<tools::ClassifyTrainCommand>()},
       {"classify", std::make_unique<tools::ClassifyEvalCommand>()},
+      {"model", std::make_unique<tools::ModelBuildCommand>()},
+      {"model", std::make_unique<tools::ModelEvalCommand>()},
       {nullptr, std::make_unique<tools::JournalBenchCommand>()},
       {"grasp", std::make_unique<tools::GraspDetectCommand>()},
       {"grasp", std::make_unique<tools::GraspTensorsCommand>()},

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <exception>
 #include <filesystem>
+#include <fstream>
 
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
@@ -64,11 +65,22 @@ int runTeach3d(const TeachOptions& o) {
     if (std::abs(n - 1) > 1e-3) return badInput(fmt::format("--grasp-pose: the quaternion is not unit length (|q| = {:.6f})", n));
     job.grasp = {v[0], v[1], v[2], v[3] / n, v[4] / n, v[5] / n, v[6] / n};
   }
+  if (const int rc = writeNew3dJob(o.out, job, *cloud, o.model, "vgr teach --model " + o.model); rc != 0) return rc;
+  std::printf("%s: 3D job '%s', model %zu points\n", o.out.c_str(), job.name.c_str(), cloud->points.size());
+  return 0;
+}
+
+}  // namespace
+
+int writeNew3dJob(const std::string& out, config::Job3dFile job, const vision::PlyCloud& cloud, const std::string& modelName,
+                  const std::string& comment,
+                  const std::vector<std::pair<std::string, std::string>>& extraFiles) {
+  namespace fs = std::filesystem;
   // The locator must accept the model (normals, size) before anything is written.
-  if (auto loc = vision::cloud::makeLocator3d(*cloud, job.grasp, job.search); !loc)
-    return badInput(o.model + ": " + loc.error().message);
-  if (fs::exists(o.out)) return badInput(o.out + ": already exists (a 3D job is written into a new folder)");
-  const fs::path tmp = fs::path(o.out).string() + fmt::format(".partial-{}", ::getpid());
+  if (auto loc = vision::cloud::makeLocator3d(cloud, job.grasp, job.search); !loc)
+    return badInput(modelName + ": " + loc.error().message);
+  if (fs::exists(out)) return badInput(out + ": already exists (a 3D job is written into a new folder)");
+  const fs::path tmp = fs::path(out).string() + fmt::format(".partial-{}", ::getpid());
   std::error_code ec;
   fs::remove_all(tmp, ec);
   fs::create_directories(tmp, ec);
@@ -78,19 +90,21 @@ int runTeach3d(const TeachOptions& o) {
     fs::remove_all(tmp, ec);
     return badInput(why);
   };
-  if (auto w = vision::writePlyCloud(job.modelPath(), *cloud, "vgr teach --model " + o.model); !w) return cleanUp(w.error().message);
+  if (auto w = vision::writePlyCloud(job.modelPath(), cloud, comment); !w) return cleanUp(w.error().message);
   if (auto w = config::writeJob3d(job); !w) return cleanUp(w.error().message);
+  for (const auto& [name, text] : extraFiles) {
+    std::ofstream f(tmp / name);
+    f << text;
+    if (!f.flush()) return cleanUp((tmp / name).string() + ": cannot write");
+  }
   auto back = config::loadJob3d(tmp.string());  // what was written must load
   if (!back) return cleanUp("written job does not load: " + back.error().message);
-  if (auto m = vision::readPlyCloud(back->modelPath()); !m || m->points.size() != cloud->points.size())
+  if (auto m = vision::readPlyCloud(back->modelPath()); !m || m->points.size() != cloud.points.size())
     return cleanUp(back->modelPath() + ": written model does not read back");
-  fs::rename(tmp, o.out, ec);
-  if (ec) return cleanUp(fmt::format("{}: cannot rename to {}: {}", tmp.string(), o.out, ec.message()));
-  std::printf("%s: 3D job '%s', model %zu points\n", o.out.c_str(), job.name.c_str(), cloud->points.size());
+  fs::rename(tmp, out, ec);
+  if (ec) return cleanUp(fmt::format("{}: cannot rename to {}: {}", tmp.string(), out, ec.message()));
   return 0;
 }
-
-}  // namespace
 
 int runTeach(const TeachOptions& o) {
   namespace fs = std::filesystem;

@@ -5,9 +5,12 @@
 #pragma once
 
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "config/job3d.hpp"
 #include "tools/vgr/subcommand.hpp"
+#include "vision/ply_file.hpp"
 
 namespace vgr::tools {
 
@@ -28,6 +31,16 @@ struct TeachOptions {
 };
 
 int runTeach(const TeachOptions& o);
+
+// Writes a new 3D job folder OUT (job.yaml of kind 3d, model.ply with `comment` - the model
+// is called modelName in messages - and the
+// extra files given as name -> text) through OUT.partial-PID, renamed at the end; the 3D
+// locator must accept the model first and the written job must load. Shared by `vgr teach
+// --model` and `vgr model build`. Returns 0, or 2 with the message on stderr (nothing
+// written).
+int writeNew3dJob(const std::string& out, config::Job3dFile job, const vision::PlyCloud& cloud, const std::string& modelName,
+                  const std::string& comment,
+                  const std::vector<std::pair<std::string, std::string>>& extraFiles = {});
 
 class TeachCommand final : public OptionsSubcommand<TeachOptions, runTeach> {
  public:
