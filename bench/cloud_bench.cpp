@@ -61,6 +61,11 @@ int main(int argc, char** argv) {
   app.add_option("--ransac-iterations", p.ransacIterations);
   app.add_option("--ransac-confidence", p.ransacConfidence);
   app.add_option("--max-contradiction", p.maxContradiction);
+  app.add_option("--cluster-mm", p.clusterMm, "DBSCAN radius of the scene clusters, 0 = whole scene");
+  app.add_option("--feature-neighbours", p.featureNeighbours, "model features per scene point");
+  app.add_option("--feature-radius", p.featureRadiusMm);
+  app.add_option("--hypotheses", p.hypothesesPerCopy);
+  app.add_option("--max-below-plane", p.maxBelowPlaneMm);
   app.add_option("--camera-tilt-max", scene.cameraTiltMaxDeg)->check(CLI::Range(0.0, 30.0));
   std::vector<double> roi;
   app.add_option("--roi", roi, "x_min,x_max,y_min,y_max,z_min,z_max (mm, camera frame)")->delimiter(',')->expected(6);

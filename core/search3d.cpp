@@ -19,6 +19,8 @@ const std::vector<Search3dKey>& search3dKeys() {
       VGR_KEY("plane_min_share", planeMinShare, 0, 1, false),
       VGR_KEY("feature_radius_mm", featureRadiusMm, 1, 200, false),
       VGR_KEY("model_views", modelViews, 0, 500, true),
+      VGR_KEY("cluster_mm", clusterMm, 0, 100, false),
+      VGR_KEY("feature_neighbours", featureNeighbours, 1, 10, true),
       VGR_KEY("ransac_iterations", ransacIterations, 100, 10000000, true),
       VGR_KEY("ransac_confidence", ransacConfidence, 1e-6, 1, false),
       VGR_KEY("ransac_distance_mm", ransacDistanceMm, 0.5, 100, false),
@@ -29,6 +31,7 @@ const std::vector<Search3dKey>& search3dKeys() {
       VGR_KEY("fitness_distance_mm", fitnessDistanceMm, 0.2, 50, false),
       VGR_KEY("max_contradiction", maxContradiction, 0, 1, false),
       VGR_KEY("retry_min_fitness", retryMinFitness, 0, 1, false),
+      VGR_KEY("max_below_plane_mm", maxBelowPlaneMm, 0, 1000, false),
       VGR_KEY("visible_max_angle_deg", visibleMaxAngleDeg, 1, 89, false),
       VGR_KEY("threads", threads, 1, 64, true),
   };

@@ -34,7 +34,12 @@ struct Search3dParams {
   // [0, 500] views of the model its features are computed on (docs/3d.md "Features"); 0 =
   // FPFH of the whole model and Open3D's RANSAC as paper 004 does (ransacConfidence applies)
   int modelViews = 40;
-  int ransacIterations = 20000; // [100, 1e7] per rotated copy
+  // [0, 100] Euclidean clusters (DBSCAN radius) of the scene after plane removal; each
+  // cluster of plausible size is registered on its own (docs/3d.md "Clusters"); 0 = the
+  // whole scene at once (the paper's pipeline)
+  double clusterMm = 8;
+  int featureNeighbours = 1;    // [1, 10] model features matched per scene point (k nearest in FPFH space)
+  int ransacIterations = 20000; // [100, 1e7] per rotated copy (per cluster with clusterMm > 0)
   double ransacConfidence = 0.999;  // (0, 1] early stop of Open3D's RANSAC (modelViews = 0 only)
   double ransacDistanceMm = 15;     // [0.5, 100] distance checker of our RANSAC loop
   double edgeSimilarity = 0.8;      // [0, 1) edge-length checker (Open3D's, 1 = equal edges)
@@ -44,6 +49,9 @@ struct Search3dParams {
   double fitnessDistanceMm = 2.5;  // [0.2, 50] a model point "is seen" when the measured z is this close
   double maxContradiction = 0.08;  // [0, 1] share of the model's visible points where the sensor sees through it
   double retryMinFitness = 0.1;    // [0, f_l] a consistent candidate at least this good below f_l asks for a new view
+  // [0, 1000] no model point may lie farther than this beyond the removed plane (table, bin
+  // floor): a part rests on it (docs/3d.md "Evidence"); applies only when a plane was removed
+  double maxBelowPlaneMm = 5;
   double visibleMaxAngleDeg = 70;  // [1, 89] model points seen more obliquely count neither way
   int threads = 1;              // [1, 64] OpenMP threads Open3D may use
   unsigned seed = 1;            // RANSAC's random seed (each locate call is deterministic)

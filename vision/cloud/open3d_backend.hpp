@@ -65,6 +65,8 @@ class PointSet {
   // faces of an 8 mm plate; the sensor's full-resolution points at 2.5 mm do not (measured:
   // 45 % -> 90 % of normals within 15 deg of the true ones on the bracket).
   void estimateNormalsFrom(const PointSet& dense, double radiusMm, const Eigen::Vector3d& viewpoint);
+  // Replaces the normals (one per point).
+  void setNormals(Points normals);
   // Each point takes the normal of the nearest point of `dense` (which has normals): the
   // model's exact normals carried onto its voxel grid without averaging across edges.
   void normalsFromNearest(const PointSet& dense);
