@@ -2,7 +2,8 @@
 find_package(PkgConfig REQUIRED)
 find_package(Threads REQUIRED)
 find_package(Eigen3 3.4 REQUIRED NO_MODULE)
-find_package(OpenCV 4 REQUIRED COMPONENTS core imgproc imgcodecs features2d flann calib3d aruco ml)
+# dnn: the grasp network (vision/grasp/ggcnn_detector.cpp) runs from ONNX through cv::dnn.
+find_package(OpenCV 4 REQUIRED COMPONENTS core imgproc imgcodecs features2d flann calib3d aruco ml dnn)
 find_package(yaml-cpp REQUIRED)
 find_package(spdlog REQUIRED)
 find_package(fmt REQUIRED)

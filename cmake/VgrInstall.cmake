@@ -4,6 +4,7 @@
 #   /usr/lib/systemd/system/vgrd.service, /usr/lib/sysusers.d/vgr.conf, /usr/lib/tmpfiles.d/vgr.conf
 #   /etc/vgr/cell.yaml (+ sim-calib/*.yaml)  the example sim cell, journal in /var/lib/vgr
 #   /usr/share/vgr/robot/                    robot-side programs (examples/robot/)
+#   /usr/share/vgr/models/grasp/ggcnn.onnx   the grasp network (models/grasp/, docs/grasp.md)
 #   /usr/share/doc/vgr/                      README.md, docs/*.md
 # With the prefix /usr the configuration goes to /etc (not /usr/etc), decided at install
 # time, so `cmake --install build --prefix /usr` of a tree configured with the default
@@ -18,6 +19,7 @@ install(FILES ${PROJECT_SOURCE_DIR}/systemd/vgr.tmpfiles DESTINATION lib/tmpfile
 
 file(GLOB VGR_ROBOT_PROGRAMS ${PROJECT_SOURCE_DIR}/examples/robot/*)
 install(FILES ${VGR_ROBOT_PROGRAMS} DESTINATION ${CMAKE_INSTALL_DATADIR}/vgr/robot)
+install(FILES ${PROJECT_SOURCE_DIR}/models/grasp/ggcnn.onnx DESTINATION ${CMAKE_INSTALL_DATADIR}/vgr/models/grasp)
 file(GLOB VGR_DOCS ${PROJECT_SOURCE_DIR}/docs/*.md)
 install(FILES ${PROJECT_SOURCE_DIR}/README.md ${VGR_DOCS} DESTINATION ${CMAKE_INSTALL_DOCDIR})
 

@@ -8,6 +8,8 @@
 #include <unistd.h>
 
 #include "config/depth_dataset.hpp"
+#include "config/grasp_truth_file.hpp"
+#include "sim/grasp_truth.hpp"
 #include "vision/ply_file.hpp"
 
 namespace vgr::sim {
@@ -29,6 +31,7 @@ std::string optionsYaml(const DepthDatasetOptions& o) {
                    "pose_noise_deg: {}, bad_view: {}, bad_view_mm: {}}}\n",
                    o.views, v.distanceMm, v.elevationLowDeg, v.elevationHighDeg, v.poseNoiseMm, v.poseNoiseDeg, v.badView, v.badViewMm);
   y += fmt::format("model_spacing_mm: {}\nmesh_edge_mm: {}\n", o.modelSpacingMm, o.meshEdgeMm);
+  if (o.grasps) y += "grasps: true  # grasps.csv (docs/grasp.md)\n";
   return y;
 }
 
@@ -64,6 +67,11 @@ Result<DepthDatasetSummary> writeInto(const DepthDatasetOptions& o, const fs::pa
   DepthDatasetSummary sum;
   std::ofstream csv(dir / "truth.csv");
   csv << config::depthTruthCsvHeader() << ",part,face,pixels,visible_pixels\n";
+  std::ofstream gcsv;
+  if (o.grasps) {
+    gcsv.open(dir / "grasps.csv");
+    gcsv << config::graspTruthCsvHeader() << "\n";
+  }
   for (int i = 0; i < o.count; ++i) {
     auto scene = renderDepthScene(s, static_cast<std::uint64_t>(i));
     if (!scene) return std::unexpected(scene.error());
@@ -78,10 +86,28 @@ Result<DepthDatasetSummary> writeInto(const DepthDatasetOptions& o, const fs::pa
       csv << config::depthTruthCsvRow(name, &t.pose) << fmt::format(",{},{},{},{}\n", k, t.face, t.pixels, t.visiblePixels);
       ++sum.parts;
     }
+    if (o.grasps) {
+      auto truth = sceneGraspTruth(*scene, s.part);
+      if (!truth) return std::unexpected(truth.error());
+      config::GraspTruthRow r;
+      r.image = name;
+      if (truth->empty()) gcsv << config::graspTruthCsvRow(r) << "\n";
+      for (const auto& g : *truth) {
+        r.hasGrasp = true;
+        r.part = g.part, r.grasp = g.grasp, r.sample = g.sample;
+        r.u = g.u, r.v = g.v, r.angleDeg = g.angleDeg, r.widthPx = g.widthPx, r.jawPx = g.jawPx;
+        r.xMm = g.centreCam.x, r.yMm = g.centreCam.y, r.zMm = g.centreCam.z, r.widthMm = g.widthMm;
+        gcsv << config::graspTruthCsvRow(r) << "\n";
+      }
+    }
     ++sum.images;
   }
   csv.close();
   if (!csv) return fail(Status::Internal, fmt::format("{}/truth.csv: cannot write", o.outDir));
+  if (o.grasps) {
+    gcsv.close();
+    if (!gcsv) return fail(Status::Internal, fmt::format("{}/grasps.csv: cannot write", o.outDir));
+  }
 
   if (o.views > 0) {
     PartViewsOptions v = o.viewOptions;

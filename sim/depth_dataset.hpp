@@ -3,7 +3,8 @@
 //   DIR/camera.yaml, DIR/images/NNNN.png (16-bit z), DIR/truth.csv (+ part, face, pixels,
 //   visible_pixels), DIR/model.ply (exterior points + normals, 1 mm grid), DIR/mesh.ply
 //   (exterior triangles, edges <= 1.5 mm), DIR/views/view_NN.png + views/views.csv (when
-//   views > 0), DIR/dataset.yaml (the options it was made with).
+//   views > 0), DIR/dataset.yaml (the options it was made with), and with `grasps` the
+//   grasp ground truth DIR/grasps.csv (config/grasp_truth_file.hpp, sim/grasp_truth.hpp).
 // Nothing half-written: the files go to DIR.partial-PID, renamed to DIR at the end; DIR must
 // not exist (or be an empty folder). Start-up style I/O, one thread.
 #pragma once
@@ -23,6 +24,7 @@ struct DepthDatasetOptions {
   PartViewsOptions viewOptions;  // part, camera, sensor and seed come from `scene`
   double modelSpacingMm = 1;  // model.ply grid
   double meshEdgeMm = 1.5;    // mesh.ply triangle edges
+  bool grasps = false;        // also write grasps.csv
 };
 
 struct DepthDatasetSummary {

@@ -276,6 +276,7 @@ Result<DepthScene> renderDepthScene(const DepthSceneOptions& o, std::uint64_t in
     scene.parts[k].visiblePixels = cv::countNonZero(mask);
   }
   scene.labels = exact.labels;
+  scene.exactZ = exact.z;
   scene.depth = applySensor(exact, o.camera, o.sensor, o.seed * 0x9E3779B97F4A7C15ull + index);
   return scene;
 }

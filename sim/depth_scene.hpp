@@ -60,6 +60,8 @@ struct DepthPartTruth {
 struct DepthScene {
   cv::Mat depth;             // CV_16UC1: v * camera.depthScaleMm = z mm; 0 = no data
   cv::Mat labels;            // CV_16UC1: 1 + part index where a part is nearest; 0 anything else
+  cv::Mat exactZ;            // CV_64FC1: exact z of the nearest surface (mm, +inf where none), before
+                             // the sensor: the grasp truth's jaw checks (sim/grasp_truth.hpp)
   DepthCameraModel camera;
   std::vector<DepthPartTruth> parts;  // empty = a scene without a part
 };

@@ -55,7 +55,7 @@ for f in /usr/bin/vgrd /usr/bin/vgr /usr/bin/vgr-sim-camera /usr/bin/vgr-sim-plc
 done
 for f in /etc/vgr/cell.yaml /etc/vgr/sim-calib/intrinsics.yaml /usr/lib/sysusers.d/vgr.conf /usr/lib/tmpfiles.d/vgr.conf \
          /usr/share/vgr/robot/VgrPick.mod /usr/share/vgr/robot/vgr_pick.script /usr/share/vgr/robot/VGR_PICK.ls \
-         /usr/share/doc/vgr/README.md; do
+         /usr/share/vgr/models/grasp/ggcnn.onnx /usr/share/doc/vgr/README.md; do
   check "$f present" test -f "$f"
 done
 check "/etc/vgr/cell.yaml is a conffile" sh -c "dpkg-query -W -f='\${Conffiles}' vgr | grep -q ' /etc/vgr/cell.yaml '"

@@ -10,6 +10,7 @@
 //   vgr soak [--triggers N]   fault-injection run of the simulated cell (docs/robustness.md)
 //   vgr journal-bench         the journal's write and fdatasync cost per record (docs/journal.md)
 //   vgr replay --journal J --archive A --job DIR   a changed job on archived frames (docs/commissioning.md)
+//   vgr grasp detect | tensors  grasp detection in depth images (docs/grasp.md; scored by vgr eval --grasp)
 #include <map>
 #include <memory>
 #include <string>
@@ -33,6 +34,7 @@
 #include "tools/vgr/demo.hpp"
 #include "tools/vgr/eval.hpp"
 #include "tools/vgr/grab.hpp"
+#include "tools/vgr/grasp.hpp"
 #include "tools/vgr/locate.hpp"
 #include "tools/vgr/journal_bench.hpp"
 #include "tools/vgr/repeatability.hpp"
@@ -56,6 +58,7 @@ constexpr Group kGroups[] = {
     {"calibrate", "camera intrinsics, hand-eye, work plane, synthetic calibration data, verify"},
     {"sim", "simulation tools"},
     {"classify", "part classifier of paper 002: train, eval (docs/classification.md)"},
+    {"grasp", "grasp detection in depth images (paper 003): detect, tensors (docs/grasp.md)"},
     {"model", "3D part models from depth views: build, eval (docs/3d.md)"},
 };
 
@@ -96,6 +99,8 @@ int main(int argc, char** argv) {
       {"model", std::make_unique<tools::ModelBuildCommand>()},
       {"model", std::make_unique<tools::ModelEvalCommand>()},
       {nullptr, std::make_unique<tools::JournalBenchCommand>()},
+      {"grasp", std::make_unique<tools::GraspDetectCommand>()},
+      {"grasp", std::make_unique<tools::GraspTensorsCommand>()},
   };
 
   std::map<std::string, CLI::App*> groups;  // added when their first member is

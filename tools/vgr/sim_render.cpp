@@ -145,6 +145,7 @@ CLI::App* SimRenderCommand::add(CLI::App& parent) {
   only3d_.push_back(c->add_option("--bad-view", z.viewOptions.badView, "3D: this view's reported position is off by --bad-view-mm more (default -1: none)")
                         ->check(CLI::Range(-1, 71)));
   only3d_.push_back(c->add_option("--bad-view-mm", z.viewOptions.badViewMm, "3D: the bad view's offset, mm (default 20)")->check(CLI::Range(0.0, 1000.0)));
+  only3d_.push_back(c->add_flag("--grasps", z.grasps, "3D: also write the grasp ground truth grasps.csv (docs/grasp.md)"));
   return c;
 }
 
