@@ -1,5 +1,7 @@
 #include "config/depth_dataset.hpp"
 
+#include "config/csv_line.hpp"
+
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -15,15 +17,6 @@
 namespace vgr::config {
 namespace {
 
-std::vector<std::string> splitCsv(std::string line) {
-  if (!line.empty() && line.back() == '\r') line.pop_back();
-  std::vector<std::string> out(1);
-  for (char c : line) {
-    if (c == ',') out.emplace_back();
-    else out.back() += c;
-  }
-  return out;
-}
 
 bool parseDouble(const std::string& s, double& v) {
   const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
@@ -53,7 +46,7 @@ Result<std::vector<std::vector<std::string>>> readCsv(const std::string& path, c
   std::string want;
   for (const auto& c : fixed) want += (want.empty() ? "" : ",") + c;
   if (!std::getline(in, line)) return fail(Status::BadArgument, fmt::format("{}:1: empty file, expected the header {}", path, want));
-  const auto header = splitCsv(line);
+  const auto header = splitCsvLine(line);
   for (std::size_t i = 0; i < fixed.size(); ++i)
     if (i >= header.size() || header[i] != fixed[i])
       return fail(Status::BadArgument, fmt::format("{}:1: the header must start with {} (column {} is '{}')", path, want, i + 1,
@@ -63,7 +56,7 @@ Result<std::vector<std::vector<std::string>>> readCsv(const std::string& path, c
   while (std::getline(in, line)) {
     ++n;
     if (line.empty() || line == "\r") continue;
-    auto f = splitCsv(line);
+    auto f = splitCsvLine(line);
     if (f.size() != header.size())
       return fail(Status::BadArgument, fmt::format("{}:{}: expected {} fields as in the header, got {}", path, n, header.size(), f.size()));
     rows.push_back(std::move(f));

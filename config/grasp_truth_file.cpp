@@ -1,5 +1,7 @@
 #include "config/grasp_truth_file.hpp"
 
+#include "config/csv_line.hpp"
+
 #include <charconv>
 #include <cmath>
 #include <fstream>
@@ -14,15 +16,6 @@ const char* const kColumns[] = {"image", "part",  "grasp",   "sample", "u_px", "
                                 "width_px", "jaw_px", "x_mm", "y_mm", "z_mm", "width_mm"};
 constexpr std::size_t kNumColumns = sizeof(kColumns) / sizeof(kColumns[0]);
 
-std::vector<std::string> splitCsv(std::string line) {
-  if (!line.empty() && line.back() == '\r') line.pop_back();
-  std::vector<std::string> out(1);
-  for (char c : line) {
-    if (c == ',') out.emplace_back();
-    else out.back() += c;
-  }
-  return out;
-}
 
 }  // namespace
 
@@ -45,7 +38,7 @@ Result<std::vector<GraspTruthRow>> loadGraspTruth(const std::string& path) {
   std::ifstream in(path);
   if (!in) return fail(Status::BadArgument, path + ": cannot open");
   std::string line;
-  if (!std::getline(in, line) || splitCsv(line) != splitCsv(graspTruthCsvHeader()))
+  if (!std::getline(in, line) || splitCsvLine(line) != splitCsvLine(graspTruthCsvHeader()))
     return fail(Status::BadArgument, fmt::format("{}:1: the header must be {}", path, graspTruthCsvHeader()));
   std::vector<GraspTruthRow> rows;
   std::map<std::string, std::pair<bool, bool>> seen;  // image -> (empty row, grasp row)
@@ -53,7 +46,7 @@ Result<std::vector<GraspTruthRow>> loadGraspTruth(const std::string& path) {
   while (std::getline(in, line)) {
     ++n;
     if (line.empty() || line == "\r") continue;
-    const auto f = splitCsv(line);
+    const auto f = splitCsvLine(line);
     const std::string where = fmt::format("{}:{}", path, n);
     if (f.size() != kNumColumns) return fail(Status::BadArgument, fmt::format("{}: expected {} fields, got {}", where, kNumColumns, f.size()));
     GraspTruthRow r;

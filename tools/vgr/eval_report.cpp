@@ -1,5 +1,7 @@
 #include "tools/vgr/eval_report.hpp"
 
+#include "config/csv_line.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -28,20 +30,6 @@ namespace {
 
 constexpr double kDegToRad = M_PI / 180.0;
 
-std::vector<std::string> splitCsv(const std::string& line) {
-  std::vector<std::string> out;
-  std::string cur;
-  for (char c : line) {
-    if (c == ',') {
-      out.push_back(cur);
-      cur.clear();
-    } else if (c != '\r') {
-      cur += c;
-    }
-  }
-  out.push_back(cur);
-  return out;
-}
 
 
 // What a `vgr sim render` dataset tells about its geometry, for paper 001's rates: the camera
@@ -113,7 +101,7 @@ Result<std::vector<TruthImage>> readTruth(const std::string& folder) {
   if (!in) return fail(Status::BadArgument, path + ": cannot open");
   std::string line;
   if (!std::getline(in, line)) return fail(Status::BadArgument, path + ":1: empty file, expected the header image,x_px,y_px,angle_deg");
-  const auto header = splitCsv(line);
+  const auto header = config::splitCsvLine(line);
   std::map<std::string, std::size_t> col;
   for (std::size_t i = 0; i < header.size(); ++i) col[header[i]] = i;
   for (const char* k : {"image", "x_px", "y_px", "angle_deg"})
@@ -125,7 +113,7 @@ Result<std::vector<TruthImage>> readTruth(const std::string& folder) {
   while (std::getline(in, line)) {
     ++lineNo;
     if (line.empty() || line == "\r") continue;
-    const auto f = splitCsv(line);
+    const auto f = config::splitCsvLine(line);
     if (f.size() < header.size()) return fail(Status::BadArgument, fmt::format("{}:{}: expected {} columns, got {}", path, lineNo, header.size(), f.size()));
     const std::string& name = f[col["image"]];
     auto it = index.find(name);
