@@ -235,22 +235,26 @@ CycleResult CycleRunner::ended(CycleResult r, const Trigger& t, Status status, c
   return r;
 }
 
+Result<void> CycleRunner::grabFrame(const Trigger& t, bool eyeInHand, Clock::time_point deadline, CycleResult& r) {
+  if (eyeInHand && !t.flange)
+    return fail(Status::BadArgument, fmt::format("job {}: the camera is on the flange (eye-in-hand) and this {} trigger "
+                                                 "carries no flange pose; a robot sends TRIG,<job>,<pose>",
+                                                 t.jobId, triggerSourceName(t.source)));
+  const auto grabStart = Clock::now();
+  auto g = camera_.grab(frame_, deadline - milliseconds(kProcessingReserveMs));
+  r.grabMs = msSince(grabStart);
+  if (!g) return fail(Status::CameraError, g.error().message);
+  r.frameId = frame_.frameId;
+  return {};
+}
+
 CycleResult CycleRunner::runCycle3d(const Trigger& t, PreparedJob& job, CycleResult r) {
   const auto deadline = t.at + milliseconds(cell_.cycleDeadlineMs);
   auto end = [&](Status status, const std::string& why) { return ended(std::move(r), t, status, why); };
   if (!depthFrame_)
     return end(Status::BadArgument, fmt::format("job {} is a 3D job and camera '{}' is a 2D camera", t.jobId, cell_.camera.name));
-  // The camera on the flange: the pose of this image is the trigger's flange pose.
-  if (depthFrame_->eyeInHand && !t.flange)
-    return end(Status::BadArgument, fmt::format("job {}: the camera is on the flange (eye-in-hand) and this {} trigger "
-                                                "carries no flange pose; a robot sends TRIG,<job>,<pose>",
-                                                t.jobId, triggerSourceName(t.source)));
-  // 1. grab
-  const auto grabStart = Clock::now();
-  auto g = camera_.grab(frame_, deadline - milliseconds(kProcessingReserveMs));
-  r.grabMs = msSince(grabStart);
-  if (!g) return end(Status::CameraError, g.error().message);
-  r.frameId = frame_.frameId;
+  // 1. grab (the camera on the flange: the pose of this image is the trigger's flange pose)
+  if (auto g = grabFrame(t, depthFrame_->eyeInHand, deadline, r); !g) return end(g.error().code, g.error().message);
   if (!frame_.depth())
     return end(Status::BadArgument, fmt::format("job {} is a 3D job and camera '{}' delivered a 2D frame (not Coord3D_C16)",
                                                 t.jobId, cell_.camera.name));
@@ -321,19 +325,9 @@ CycleResult CycleRunner::runCycle(const Trigger& t, cv::Mat& shown) {
   if (job->second.locator3d) return runCycle3d(t, job->second, std::move(r));
   if (!mapping_)  // a 2D job on a depth camera's cell (the config refuses it; a safety net)
     return end(Status::BadArgument, fmt::format("job {}: a 2D method on a depth camera's cell", t.jobId));
-  // An eye-in-hand camera moves with the robot: without the flange pose of this image there
-  // is no mapping (a PLC or operator trigger, or a robot's TRIG without its pose).
-  if (mapping_->eyeInHand() && !t.flange)
-    return end(Status::BadArgument, fmt::format("job {}: the camera is on the flange (eye-in-hand) and this {} trigger "
-                                                "carries no flange pose; a robot sends TRIG,<job>,<pose>",
-                                                t.jobId, triggerSourceName(t.source)));
-
-  // 1. grab
-  const auto grabStart = Clock::now();
-  auto g = camera_.grab(frame_, deadline - milliseconds(kProcessingReserveMs));
-  r.grabMs = msSince(grabStart);
-  if (!g) return end(Status::CameraError, g.error().message);
-  r.frameId = frame_.frameId;
+  // 1. grab. An eye-in-hand camera moves with the robot: without the flange pose of this
+  // image there is no mapping (a PLC or operator trigger, or a robot's TRIG without its pose).
+  if (auto g = grabFrame(t, mapping_->eyeInHand() != nullptr, deadline, r); !g) return end(g.error().code, g.error().message);
   // A depth frame is no image for a 2D method (the camera was set to Coord3D_C16).
   if (frame_.depth())
     return end(Status::BadArgument, fmt::format("job {}: a 2D method cannot locate in the depth frames of this camera "

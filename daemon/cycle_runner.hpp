@@ -37,6 +37,7 @@
 
 #include "config/cell_config.hpp"
 #include "core/cycle.hpp"
+#include "core/result.hpp"
 #include "core/heartbeat.hpp"
 #include "daemon/cell_mapping.hpp"
 #include "drivers/camera_worker.hpp"
@@ -120,6 +121,10 @@ class CycleRunner {
   struct PreparedJob;
   // The rest of runCycle for a 3D job, after the job and calibration checks.
   CycleResult runCycle3d(const Trigger& t, PreparedJob& job, CycleResult r);
+  // How both cycles start: an eye-in-hand camera needs the trigger's flange pose, then the
+  // grab into frame_ before the deadline's processing reserve (r gets grabMs, frameId).
+  // Errors: BadArgument (no flange pose), CameraError (the grab's reason).
+  Result<void> grabFrame(const Trigger& t, bool eyeInHand, std::chrono::steady_clock::time_point deadline, CycleResult& r);
   // r ended with `status` (no parts), its time taken, `why` logged as a warning.
   static CycleResult ended(CycleResult r, const Trigger& t, Status status, const std::string& why);
 
