@@ -50,14 +50,20 @@ Result<std::unique_ptr<vision::Locator>> makeJobLocator(const config::JobConfig&
   return std::move(*loc);
 }
 
+Result<std::unique_ptr<vision::cloud::Locator3d>> makeJobLocator3d(const config::Job3dFile& job) {
+  auto model = vision::readPlyCloud(job.modelPath());
+  if (!model) return fail(Status::BadArgument, model.error().message);
+  auto loc = vision::cloud::makeLocator3d(*model, job.grasp, job.search);
+  if (!loc) return fail(Status::BadArgument, fmt::format("{}: {}", job.modelPath(), loc.error().message));
+  return std::move(*loc);
+}
+
 Result<std::unique_ptr<vision::cloud::Locator3d>> makeJobLocator3d(const config::JobConfig& job) {
   auto why = [&](const Error& e) { return fail(Status::BadArgument, fmt::format("job {} ({}): {}", job.id, job.folder, e.message)); };
   auto jf = config::loadJob3d(job.folder);
   if (!jf) return why(jf.error());
-  auto model = vision::readPlyCloud(jf->modelPath());
-  if (!model) return why(model.error());
-  auto loc = vision::cloud::makeLocator3d(*model, jf->grasp, jf->search);
-  if (!loc) return fail(Status::BadArgument, fmt::format("job {} ({}): {}: {}", job.id, job.folder, jf->modelPath(), loc.error().message));
+  auto loc = makeJobLocator3d(*jf);
+  if (!loc) return why(loc.error());
   return std::move(*loc);
 }
 

@@ -17,6 +17,7 @@
 
 #include "config/cell_config.hpp"
 #include "config/job.hpp"
+#include "config/job3d.hpp"
 #include "core/result.hpp"
 #include "vision/cloud/locator3d.hpp"
 #include "vision/locate/locator.hpp"
@@ -36,6 +37,9 @@ Result<std::unique_ptr<vision::Locator>> makeJobLocator(const config::JobConfig&
 // locator built (the model's features computed: seconds for a dense model). Errors
 // (Status::BadArgument) name the job and the file: "job 3 (FOLDER): FOLDER/model.ply: ...".
 Result<std::unique_ptr<vision::cloud::Locator3d>> makeJobLocator3d(const config::JobConfig& job);
+// A 3D job folder already loaded (`vgr locate`): its model.ply read and the locator built.
+// Errors (Status::BadArgument) name the file: "FOLDER/model.ply: ...".
+Result<std::unique_ptr<vision::cloud::Locator3d>> makeJobLocator3d(const config::Job3dFile& job);
 
 // What the overlay picture (vision/overlay.hpp) draws of a job: its search ROI, and its
 // template's size and grasp point (the found part's outline). A job without a folder has

@@ -32,7 +32,6 @@
 #include "vision/locate/locator.hpp"
 #include "vision/overlay.hpp"
 #include "vision/part_poses.hpp"
-#include "vision/ply_file.hpp"
 
 namespace vgr::tools {
 
@@ -58,10 +57,8 @@ int runLocate3d(const LocateOptions& o) {
   if (!camera) return badInput(camera.error().message + (o.camera.empty() ? " (give the depth camera with --camera)" : ""));
   auto depth = vision::readDepthMm(o.image, camera->depthScaleMm, camera->width, camera->height);
   if (!depth) return badInput(depth.error().message);
-  auto model = vision::readPlyCloud(job->modelPath());
-  if (!model) return badInput(model.error().message);
-  auto locator = vision::cloud::makeLocator3d(*model, job->grasp, job->search);
-  if (!locator) return badInput(job->modelPath() + ": " + locator.error().message);
+  auto locator = daemon::makeJobLocator3d(*job);  // as vgrd builds it
+  if (!locator) return badInput(locator.error().message);
   const auto t0 = std::chrono::steady_clock::now();
   auto out = (*locator)->locate(*depth, camera->intrinsics());
   const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
