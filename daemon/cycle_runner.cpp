@@ -215,14 +215,14 @@ void CycleRunner::run() {
         r.status = Status::Internal;
         r.triggerTime = t.wallAt;
         lock.unlock();
-        if (sinks_.onResult) sinks_.onResult(r, cv::Mat());
+        if (sinks_.onResult) sinks_.onResult(r, CycleImage{});
         continue;
       }
     }
     if (sinks_.onStarted) sinks_.onStarted(t.cycleId, t.jobId);
-    cv::Mat image;
-    CycleResult r = runCycle(t, image);
-    if (sinks_.onResult) sinks_.onResult(r, image);
+    CycleImage shown;
+    CycleResult r = runCycle(t, shown);
+    if (sinks_.onResult) sinks_.onResult(r, shown);
   }
 }
 
@@ -248,7 +248,7 @@ Result<void> CycleRunner::grabFrame(const Trigger& t, bool eyeInHand, Clock::tim
   return {};
 }
 
-CycleResult CycleRunner::runCycle3d(const Trigger& t, PreparedJob& job, CycleResult r) {
+CycleResult CycleRunner::runCycle3d(const Trigger& t, PreparedJob& job, CycleResult r, CycleImage& shown) {
   const auto deadline = t.at + milliseconds(cell_.cycleDeadlineMs);
   auto end = [&](Status status, const std::string& why) { return ended(std::move(r), t, status, why); };
   if (!depthFrame_)
@@ -270,12 +270,16 @@ CycleResult CycleRunner::runCycle3d(const Trigger& t, PreparedJob& job, CycleRes
   // 2. locate (z in mm, 0 = no data; the Locator3d bounds its threads by the job's search.threads)
   const auto locateStart = Clock::now();
   const cv::Mat depth(frame_.height, frame_.width, CV_32FC1, frame_.data.data());
+  const Pose baseFromCam = depthFrame_->baseFromCamera(t.flange ? &*t.flange : nullptr);
+  shown.image = depth;  // the page draws it (a view: no copy here)
+  shown.depth = true;
+  shown.intrinsics = k;
+  shown.baseFromCamera = baseFromCam;
   auto found = job.locator3d->locate(depth, k);
   r.locateMs = msSince(locateStart);
   if (!found) return end(found.error().code, fmt::format("job {}: {}", t.jobId, found.error().message));
 
   // 3. map: T_base_grasp = T_base_cam * T_cam_grasp, all six degrees of freedom.
-  const Pose baseFromCam = depthFrame_->baseFromCamera(t.flange ? &*t.flange : nullptr);
   r.reference = job.rules.reference;
   r.parts.clear();
   for (const auto& part : found->parts) {
@@ -308,7 +312,7 @@ CycleResult CycleRunner::runCycle3d(const Trigger& t, PreparedJob& job, CycleRes
   return r;
 }
 
-CycleResult CycleRunner::runCycle(const Trigger& t, cv::Mat& shown) {
+CycleResult CycleRunner::runCycle(const Trigger& t, CycleImage& shown) {
   CycleResult r;
   r.cycleId = t.cycleId;
   r.jobId = t.jobId;
@@ -322,7 +326,7 @@ CycleResult CycleRunner::runCycle(const Trigger& t, cv::Mat& shown) {
   if (job == jobs_.end()) return end(Status::JobNotFound, fmt::format("job {} is not configured", t.jobId));
   if (!mapping_ && !depthFrame_)
     return end(Status::NotCalibrated, fmt::format("job {}: NOT_CALIBRATED: {}", t.jobId, calibrationError_));
-  if (job->second.locator3d) return runCycle3d(t, job->second, std::move(r));
+  if (job->second.locator3d) return runCycle3d(t, job->second, std::move(r), shown);
   if (!mapping_)  // a 2D job on a depth camera's cell (the config refuses it; a safety net)
     return end(Status::BadArgument, fmt::format("job {}: a 2D method on a depth camera's cell", t.jobId));
   // 1. grab. An eye-in-hand camera moves with the robot: without the flange pose of this
@@ -348,7 +352,7 @@ CycleResult CycleRunner::runCycle(const Trigger& t, cv::Mat& shown) {
     vision::toGray8(wide, frame_.bitDepth, gray8);
     image = gray8;
   }
-  shown = image;
+  shown.image = image;
   // Eye-in-hand: the camera was where the flange was for this image (checked above).
   std::optional<vision::calib::SnapshotMapping> snapshot;
   if (const auto* eyeInHand = mapping_->eyeInHand()) snapshot.emplace(*eyeInHand, *t.flange);

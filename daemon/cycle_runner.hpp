@@ -16,7 +16,8 @@
 //           RetryFromNewViewpoint (4 RETRY_NEW_VIEWPOINT)
 //   map     T_base_grasp = T_base_cam * T_cam_grasp, T_base_cam from the hand-eye file
 //           (eye-in-hand: T_base_flange of the trigger * T_flange_cam), all six DoF; limits
-//   deliver as for 2D (the sinks get no image: a depth frame is no gray picture)
+//   deliver as for 2D; the sinks get the depth frame with its intrinsics and T_base_cam
+//           (daemon/cycle_image.hpp): the page draws it, the image archive keeps gray frames only
 // Triggers come from any thread through submit() (non-blocking, bounded queue); cycles run
 // one at a time on the cycle thread; every accepted trigger produces exactly one
 // CycleResult, by its deadline (an error status when the camera or vision cannot finish).
@@ -40,6 +41,7 @@
 #include "core/result.hpp"
 #include "core/heartbeat.hpp"
 #include "daemon/cell_mapping.hpp"
+#include "daemon/cycle_image.hpp"
 #include "drivers/camera_worker.hpp"
 #include "vision/calib/pixel_mapping.hpp"
 #include "vision/cloud/locator3d.hpp"
@@ -53,10 +55,11 @@ class DriftMonitor;
 struct CycleSinks {
   // Cycle thread, when a cycle starts (the result is pending). Must not block.
   std::function<void(std::uint32_t cycleId, int jobId)> onStarted;
-  // Cycle thread, once per accepted trigger. Must not block for long. `image` is the 8-bit
-  // gray image the locator was given (valid during the call only; empty when the cycle had
-  // no frame); a sink may set r.archived (the image archive took the frame).
-  std::function<void(CycleResult& r, const cv::Mat& image)> onResult;
+  // Cycle thread, once per accepted trigger. Must not block for long. `image`: the frame the
+  // locator was given (daemon/cycle_image.hpp: 8-bit gray, or a 3D cycle's depth frame with
+  // its intrinsics and camera pose; valid during the call only; empty when the cycle had no
+  // frame); a sink may set r.archived (the image archive took the frame).
+  std::function<void(CycleResult& r, const CycleImage& image)> onResult;
 };
 
 // The cycle id after `last` (0: none yet): last + 1, wrapping to 1 after kMaxCycleId
@@ -115,12 +118,13 @@ class CycleRunner {
     std::chrono::system_clock::time_point wallAt;
   };
   void run();
-  // image: set to the image the locator was given (a view of frame_ or the converted
-  // Mono16 frame) once a frame of the right size was grabbed; left empty otherwise.
-  CycleResult runCycle(const Trigger& t, cv::Mat& image);
+  // shown: set to the image the locator was given (a view of frame_ or the converted
+  // Mono16 frame; a 3D job's depth frame with its intrinsics and T_base_cam) once a frame of
+  // the right size was grabbed; left empty otherwise.
+  CycleResult runCycle(const Trigger& t, CycleImage& shown);
   struct PreparedJob;
   // The rest of runCycle for a 3D job, after the job and calibration checks.
-  CycleResult runCycle3d(const Trigger& t, PreparedJob& job, CycleResult r);
+  CycleResult runCycle3d(const Trigger& t, PreparedJob& job, CycleResult r, CycleImage& shown);
   // How both cycles start: an eye-in-hand camera needs the trigger's flange pose, then the
   // grab into frame_ before the deadline's processing reserve (r gets grabMs, frameId).
   // Errors: BadArgument (no flange pose), CameraError (the grab's reason).

@@ -177,7 +177,7 @@ void Plant::stop() {
 
 void Plant::cycleDone(const CycleResult& r) { metrics_->cycleDone(r); }
 
-void Plant::frameDone(const CycleResult& r, const cv::Mat& image) {
+void Plant::frameDone(const CycleResult& r, const CycleImage& image) {
   if (page_) page_->frameDone(r, image);
 }
 

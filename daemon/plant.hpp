@@ -68,8 +68,9 @@ class Plant {
   // robots and journal, then resultDelivered() (the MQTT message, built from the journal line).
   void cycleDone(const CycleResult& r);
   void resultDelivered(const CycleResult& r);
-  // Cycle thread, after the PLC: the image the locator saw (empty: no frame), for the page.
-  void frameDone(const CycleResult& r, const cv::Mat& image);
+  // Cycle thread, after the PLC: the frame the locator saw (gray, or a 3D cycle's depth
+  // frame; empty: no frame), for the page.
+  void frameDone(const CycleResult& r, const CycleImage& image);
   // The page's extension point (daemon/web_page.hpp): a section of /api/status and of the
   // page, e.g. addStatusSection("drift", ...). Before start(); ignored when the page is off.
   void addStatusSection(const std::string& name, StatusSection fill);

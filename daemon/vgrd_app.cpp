@@ -70,7 +70,7 @@ struct VgrdApp::Impl {
 
   explicit Impl(config::CellConfig c) : cfg(std::move(c)) {}
 
-  void publish(CycleResult& r, const cv::Mat& image) {
+  void publish(CycleResult& r, const CycleImage& shown) {
     // Cycle thread. PLC first (one lock inside each link), then the frame's copies (archive,
     // web page: a memcpy each, no encoding here), then robots (posted to the I/O thread),
     // then the journal (disk) last. A PLC gets the results of the cycles it triggered (a
@@ -81,8 +81,8 @@ struct VgrdApp::Impl {
       const protocol::ModbusResult m = protocol::modbusResultFrom(r);
       for (auto& plc : plcs) plc->publishResult(m);
     }
-    if (archive) r.archived = archive->offer(r, image);
-    plant->frameDone(r, image);
+    if (archive) r.archived = archive->offer(r, shown.image);  // gray frames only (not a 3D cycle's depth)
+    plant->frameDone(r, shown);
     asio::post(io, [this, r, posted = std::chrono::steady_clock::now()] { handOver(r, posted); });
     journal.append(r);
     plant->resultDelivered(r);  // MQTT (the JSON payload costs the cycle thread ~tens of µs): after the PLC
@@ -274,7 +274,7 @@ Result<void> VgrdApp::start() {
 
   CycleSinks sinks;
   sinks.onStarted = [&s](std::uint32_t id, int job) { asio::post(s.io, [&s, id, job] { s.results->onCycleStarted(id, job); }); };
-  sinks.onResult = [&s](CycleResult& r, const cv::Mat& image) { s.publish(r, image); };
+  sinks.onResult = [&s](CycleResult& r, const CycleImage& shown) { s.publish(r, shown); };
   s.cycles = std::make_unique<CycleRunner>(s.cfg, *s.camera, std::move(sinks));
   // Cycle ids continue after the journal's last one (unique in the journal, no RESULT_ID
   // repeated to the PLC after a restart).

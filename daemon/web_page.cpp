@@ -24,6 +24,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/log.hpp"
+#include "core/pose.hpp"
 #include "daemon/image_archive.hpp"
 #include "daemon/job_locator.hpp"
 #include "daemon/journal.hpp"
@@ -132,7 +133,10 @@ struct WebPage::Impl {
   // The live image: the cycle thread writes a slot that is neither the latest nor the one
   // being rendered (three slots: one is always free), the render thread reads `latest`.
   struct LiveSlot {
-    cv::Mat gray;
+    cv::Mat image;  // gray, or a 3D cycle's depth frame (depth: CV_32FC1 mm, with its intrinsics and T_base_cam)
+    bool depth = false;
+    DepthIntrinsics intrinsics;
+    Pose baseFromCamera;
     CycleResult result;
   };
   std::array<LiveSlot, 3> live;
@@ -140,9 +144,14 @@ struct WebPage::Impl {
   std::condition_variable cv;
   int latest = -1, busy = -1;
   std::uint64_t liveSeq = 0, renderedSeq = 0;
-  std::shared_ptr<const std::string> liveJpeg;
-  std::uint32_t liveJpegCycle = 0;
-  double liveJpegScale = 1;
+  // A drawn picture: the JPEG, its cycle, JPEG px per image px, and a depth picture's z range.
+  struct Picture {
+    std::shared_ptr<const std::string> jpeg;
+    std::uint32_t cycle = 0;
+    double scale = 1;
+    std::optional<vision::DepthColourRange> depthMm;
+  };
+  Picture live_;  // the last live picture (jpeg null: none yet)
   struct Request {
     std::string archiveName;  // "" = the live image
     HttpRespond respond;
@@ -152,6 +161,8 @@ struct WebPage::Impl {
   std::thread renderThread;
 
   // ---- render thread ------------------------------------------------------------------
+  cv::Mat depthColours;  // a depth frame's false colours (render thread; reused)
+
   std::string encode(const cv::Mat& gray, const vision::OverlayFrame& f) const {
     cv::Mat img = gray;
     if (img.empty()) img = cv::Mat(480, 640, CV_8UC1, cv::Scalar(24));  // a cycle without a frame: its caption alone
@@ -159,6 +170,31 @@ struct WebPage::Impl {
     std::vector<uchar> buf;
     cv::imencode(".jpg", drawn, buf, {cv::IMWRITE_JPEG_QUALITY, kJpegQuality});
     return std::string(buf.begin(), buf.end());
+  }
+
+  // The live picture of a slot: the gray image with its overlay, or a 3D cycle's depth frame
+  // in false colour (near red .. far blue, no data black, a colour bar in mm) with each
+  // part's grasp frame projected (T_cam_grasp = T_base_cam^-1 * the part's base-frame pose).
+  Picture render(const LiveSlot& s) {
+    Picture p;
+    p.cycle = s.result.cycleId;
+    p.scale = scaleFor(s.image);
+    if (!s.depth || s.image.empty()) {
+      const auto f = overlayOf(s.result.cycleId, s.result.jobId, s.result.status, vision::overlayParts(s.result.parts));
+      p.jpeg = std::make_shared<const std::string>(encode(s.image, f));
+      return p;
+    }
+    std::vector<vision::OverlayPart> parts;
+    parts.reserve(s.result.parts.size());
+    const Pose camFromBase = inverse(s.baseFromCamera);
+    for (const auto& part : s.result.parts)
+      parts.push_back(vision::overlayPart3d(compose(camFromBase, part.pose), s.intrinsics, part.score));
+    vision::OverlayFrame f = overlayOf(s.result.cycleId, s.result.jobId, s.result.status, std::move(parts));
+    f.job = {};  // a 2D job's ROI and template mean nothing on a depth frame
+    f.depthRange = vision::colourDepth(s.image, depthColours);
+    p.depthMm = f.depthRange;
+    p.jpeg = std::make_shared<const std::string>(encode(depthColours, f));
+    return p;
   }
 
   vision::OverlayFrame overlayOf(std::uint32_t cycle, int job, Status status, std::vector<vision::OverlayPart> parts) const {
@@ -170,11 +206,13 @@ struct WebPage::Impl {
     return f;
   }
 
-  // X-Vgr-Cycle: the cycle drawn; X-Vgr-Scale: JPEG px per image px.
-  static HttpReply jpegReply(std::shared_ptr<const std::string> jpeg, std::uint32_t cycle, double scale) {
-    HttpReply r{200, "image/jpeg", *jpeg, {}};
-    r.headers.push_back({"X-Vgr-Cycle", std::to_string(cycle)});
-    r.headers.push_back({"X-Vgr-Scale", fmt::format("{:.6f}", scale)});
+  // X-Vgr-Cycle: the cycle drawn; X-Vgr-Scale: JPEG px per image px; a depth picture's
+  // X-Vgr-Depth-Mm: "near,far", the z its colour bar spans.
+  static HttpReply jpegReply(const Picture& p) {
+    HttpReply r{200, "image/jpeg", *p.jpeg, {}};
+    r.headers.push_back({"X-Vgr-Cycle", std::to_string(p.cycle)});
+    r.headers.push_back({"X-Vgr-Scale", fmt::format("{:.6f}", p.scale)});
+    if (p.depthMm) r.headers.push_back({"X-Vgr-Depth-Mm", fmt::format("{:.3f},{:.3f}", p.depthMm->nearMm, p.depthMm->farMm)});
     return r;
   }
   double scaleFor(const cv::Mat& gray) const { return gray.empty() ? 1.0 : vision::overlayScaleFor(gray.cols, web.liveMaxWidth); }
@@ -196,7 +234,7 @@ struct WebPage::Impl {
       parts.push_back({p.value("u_px", 0.0), p.value("v_px", 0.0), p.value("angle_img_deg", 0.0), p.value("score", 0.0),
                        p.value("label", 0), p.value("confidence", 0.0)});
     const auto f = overlayOf(j.value("cycle", 0u), j.value("job", 0), static_cast<Status>(j.value("status", -8)), std::move(parts));
-    return jpegReply(std::make_shared<const std::string>(encode(gray, f)), j.value("cycle", 0u), scaleFor(gray));
+    return jpegReply({std::make_shared<const std::string>(encode(gray, f)), j.value("cycle", 0u), scaleFor(gray), std::nullopt});
   }
 
   void renderLoop() {
@@ -224,32 +262,26 @@ struct WebPage::Impl {
         requests.pop_front();
       }
       const bool fresh = latest >= 0 && liveSeq != renderedSeq;
-      std::uint32_t cycle = liveJpegCycle;
-      double scale = liveJpegScale;
       if (fresh) {
         busy = latest;
         const std::uint64_t seq = liveSeq;
         lock.unlock();
-        const LiveSlot& s = live[static_cast<std::size_t>(busy)];
-        const auto f = overlayOf(s.result.cycleId, s.result.jobId, s.result.status, vision::overlayParts(s.result.parts));
-        auto jpeg = std::make_shared<const std::string>(encode(s.gray, f));
-        cycle = s.result.cycleId;
-        scale = scaleFor(s.gray);
+        Picture drawn = render(live[static_cast<std::size_t>(busy)]);
         lock.lock();
         busy = -1;
-        liveJpeg = std::move(jpeg);
-        liveJpegCycle = cycle;
-        liveJpegScale = scale;
+        live_ = std::move(drawn);
         renderedSeq = seq;
       }
-      auto jpeg = liveJpeg;
+      const Picture pic = live_;
       lock.unlock();
-      for (auto& w : waiting) w(jpeg ? jpegReply(jpeg, cycle, scale) : errorReply(404, "no cycle yet"));
+      for (auto& w : waiting) w(pic.jpeg ? jpegReply(pic) : errorReply(404, "no cycle yet"));
       if (fresh) {
         // The picture itself to every watching page, in one binary message: a JSON line
-        // {"type":"image","cycle","scale"}, '\n', the JPEG (no second round trip).
-        std::string msg = json{{"type", "image"}, {"cycle", cycle}, {"scale", scale}}.dump() + "\n";
-        msg += *jpeg;
+        // {"type":"image","cycle","scale"[,"depth_mm"]}, '\n', the JPEG (no second round trip).
+        json meta{{"type", "image"}, {"cycle", pic.cycle}, {"scale", pic.scale}};
+        if (pic.depthMm) meta["depth_mm"] = {std::round(pic.depthMm->nearMm * 1000) / 1000, std::round(pic.depthMm->farMm * 1000) / 1000};
+        std::string msg = meta.dump() + "\n";
+        msg += *pic.jpeg;
         boost::asio::post(io, [this, m = std::move(msg)]() mutable { server.broadcastBinary(std::move(m)); });
       }
     }
@@ -440,8 +472,8 @@ struct WebPage::Impl {
     server.routeAsync("/api/live.jpg", [this](const HttpRequest&, HttpRespond respond) {
       {
         std::lock_guard lock(mutex);
-        if (liveJpeg && renderedSeq == liveSeq) {
-          respond(jpegReply(liveJpeg, liveJpegCycle, liveJpegScale));
+        if (live_.jpeg && renderedSeq == liveSeq) {
+          respond(jpegReply(live_));
           return;
         }
       }
@@ -524,7 +556,7 @@ void WebPage::stop() {
   if (s.renderThread.joinable()) s.renderThread.join();
 }
 
-void WebPage::frameDone(const CycleResult& r, const cv::Mat& image) {
+void WebPage::frameDone(const CycleResult& r, const CycleImage& image) {
   Impl& s = *impl_;
   int w = 0;
   {
@@ -532,10 +564,13 @@ void WebPage::frameDone(const CycleResult& r, const cv::Mat& image) {
     while (w == s.latest || w == s.busy) ++w;  // three slots: one is neither
   }
   Impl::LiveSlot& slot = s.live[static_cast<std::size_t>(w)];
-  if (image.empty())
-    slot.gray.release();
+  if (image.image.empty())
+    slot.image.release();
   else
-    image.copyTo(slot.gray);  // no allocation once the slot has held a frame of this size
+    image.image.copyTo(slot.image);  // no allocation once the slot has held a frame of this size and type
+  slot.depth = image.depth;
+  slot.intrinsics = image.intrinsics;
+  slot.baseFromCamera = image.baseFromCamera;
   slot.result = r;
   {
     std::lock_guard lock(s.mutex);

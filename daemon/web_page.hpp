@@ -7,13 +7,16 @@
 //                             clients, and `sections` (the extension point, below)
 //   GET  /api/cycles?n=N      the last N (<= 200) cycles, newest first, each exactly its
 //                             journal line (Journal::toJson)
-//   GET  /api/live.jpg        the last cycle's image with its overlay (vision/overlay.hpp)
+//   GET  /api/live.jpg        the last cycle's image with its overlay (vision/overlay.hpp); a 3D
+//                             cycle's depth frame in false colour with its parts' axes and a
+//                             colour bar (header X-Vgr-Depth-Mm: "near,far", the z range)
 //   GET  /api/archive         the archived frames, newest first (?n=, <= 1000)
 //   GET  /api/archive.jpg?name=STEM.png   an archived cycle's frame with its overlay
 //   GET  /ws                  WebSocket: {"type":"cycle","cycle":<journal line>} for every
 //                             cycle as it ends; the live picture of cycle N as soon as it is
 //                             drawn, as one binary message: {"type":"image","cycle":N,
-//                             "scale":s} '\n' JPEG; {"type":"status",...} on connect
+//                             "scale":s[,"depth_mm":[near,far]]} '\n' JPEG; {"type":"status",...}
+//                             on connect
 //   POST /api/trigger?job=N   operator actions (web.actions, from web.allowed_clients only,
 //   POST /api/job?id=N        with the header X-Vgr-Action: 1): a cycle of job N (0 or none =
 //                             the default job); switch the default job. 403 otherwise.
@@ -23,11 +26,12 @@
 //                             <journal folder>/repeatability.json and shown as
 //                             /api/status -> sections.repeatability (repeatability_record.hpp)
 //
-// Cost to the cycle thread (frameDone): one copy of the gray image into a free one of three
-// preallocated buffers (no allocation once warm) and one post of the result to the I/O
-// thread. Overlay drawing and JPEG encoding run on the page's render thread, only while a
-// WebSocket client watches (then once per cycle) or when an image is asked for; JSON is
-// built on the I/O thread. Nothing is logged per cycle.
+// Cost to the cycle thread (frameDone): one copy of the gray image (a 3D cycle: of the depth
+// frame, 4 bytes a pixel) into a free one of three preallocated buffers (no allocation once
+// warm) and one post of the result to the I/O thread. Overlay drawing (for a depth frame
+// also its false colours, vision/overlay.hpp colourDepth) and JPEG encoding run on the
+// page's render thread, only while a WebSocket client watches (then once per cycle) or when
+// an image is asked for; JSON is built on the I/O thread. Nothing is logged per cycle.
 //
 // Extension point, for figures other parts of vgrd compute (the drift monitor, the
 // repeatability run, ...): addStatusSection(name, fill) before start(). `fill` runs on the
@@ -51,12 +55,10 @@
 #include "config/cell_config.hpp"
 #include "core/cycle.hpp"
 #include "core/result.hpp"
+#include "daemon/cycle_image.hpp"
 
 namespace boost::asio {
 class io_context;
-}
-namespace cv {
-class Mat;
 }
 namespace vgr::drivers {
 class CameraWorker;
@@ -96,8 +98,8 @@ class WebPage {
   void start();
   void stop();
 
-  // Cycle thread, once per cycle: `image` as the locator saw it (empty: no frame).
-  void frameDone(const CycleResult& r, const cv::Mat& image);
+  // Cycle thread, once per cycle: the frame as the locator saw it (empty: no frame).
+  void frameDone(const CycleResult& r, const CycleImage& image);
 
  private:
   struct Impl;

@@ -14,16 +14,25 @@
 //   - a label by each part: "#<rank> <score>" and " L<label> <confidence>" when the part has a class;
 //   - a caption banner on top: e.g. "cycle 17  job 1  OK  2 parts", green text for OK,
 //     red otherwise.
+// A depth frame's picture (vgrd's page for a 3D cycle, docs/3d.md "The page's depth picture")
+// is the same picture on colourDepth()'s false-colour image: each 3D part (overlayPart3d)
+// has its grasp frame's axes (x red, y green, z blue, with a dark outline) instead of the
+// in-plane arrow, then the same magenta disc, label and caption; and a colour bar at the
+// right edge says which z each colour stands for (near at the top, far at the bottom, mm).
 // Conventions (docs/architecture.md "Units"): image px, x right, y down, pixel centres at
 // integers; angles in degrees, counter-clockwise as displayed. Pure image code, any thread.
 #pragma once
 
+#include <array>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <opencv2/core.hpp>
 
 #include "core/cycle.hpp"
+#include "core/depth.hpp"
+#include "core/pose.hpp"
 #include "core/taught_template.hpp"
 #include "vision/locate/locator.hpp"  // Detection
 
@@ -35,6 +44,15 @@ struct OverlayPart {
   double score = 0;      // [0, 1]
   int label = 0;         // 0 = no class (not drawn)
   double confidence = 0; // [0, 1]: the classifier's confidence in `label` (drawn with it)
+  // A 3D part (overlayPart3d): the image px of its grasp frame's x, y and z axis ends, drawn
+  // from (u, v) in red, green and blue instead of the in-plane arrow.
+  bool axes3d = false;
+  std::array<cv::Point2d, 3> axisEnds{};
+};
+
+// The z range a depth picture's colours stand for, mm (near < far).
+struct DepthColourRange {
+  double nearMm = 0, farMm = 0;
 };
 
 struct OverlayJob {
@@ -49,6 +67,7 @@ struct OverlayFrame {
   std::vector<OverlayPart> parts;  // best first (rank 1 = first)
   std::string caption;             // banner text; empty = no banner
   bool ok = true;                  // caption colour: green (true) or red
+  std::optional<DepthColourRange> depthRange;  // a depth picture: its colour bar (mm)
 };
 
 inline constexpr int kGraspRadiusPx = 7;  // output px
@@ -61,6 +80,22 @@ cv::Mat drawOverlay(const cv::Mat& gray, const OverlayFrame& frame, double scale
 // (vgrd), in their order.
 std::vector<OverlayPart> overlayParts(const std::vector<Detection>& found);
 std::vector<OverlayPart> overlayParts(const std::vector<PartResult>& parts);
+// A depth frame (CV_32FC1, z in mm, 0 or NaN = no data) as a false-colour picture into `bgr`
+// (CV_8UC3, the frame's size; its buffer is reused): cv::COLORMAP_TURBO from dark red at
+// `near` to dark blue at `far`, pixels without data black. near / far are the 0.5th and
+// 99.5th percentiles of the frame's valid z (a 1024-bin histogram: a few stray pixels do not
+// squash the colours; z outside is drawn in the end colours); a frame whose valid z all lie
+// within 1 mm gets [z - 0.5, z + 0.5]. nullopt (and `bgr` all black) without a valid pixel.
+// Not the hot path: it allocates a mask and a histogram.
+std::optional<DepthColourRange> colourDepth(const cv::Mat& depthMm, cv::Mat& bgr);
+// The BGR colour colourDepth gives z (in the end colours outside the range).
+cv::Vec3b depthColour(double zMm, const DepthColourRange& range);
+
+// A part found in a depth frame: T_cam_grasp (mm, camera frame: x right, y down, z forward)
+// projected with the frame's pinhole intrinsics: the grasp point at (u, v) and its axes
+// `axisMm` long. A grasp point at z <= 0 (behind the camera) is drawn nowhere (u = v = -1e6).
+OverlayPart overlayPart3d(const Pose& camFromGrasp, const DepthIntrinsics& k, double score, double axisMm = 40);
+
 // "cycle 17  job 1  OK  2 parts" (or "cycle 18  job 1  -4 CAMERA_ERROR").
 std::string cycleCaption(std::uint32_t cycleId, int jobId, Status status, std::size_t parts);
 

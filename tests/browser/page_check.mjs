@@ -4,7 +4,7 @@
 // cycles), then one JSON line with what it measured, and exits 0 when every check passed.
 //
 //   node page_check.mjs --url http://127.0.0.1:PORT/ --journal FILE --cycles N
-//                       [--allowed 127.0.0.2] [--shots DIR] [--timeout-ms 20000]
+//                       [--allowed 127.0.0.2] [--shots DIR] [--timeout-ms 20000] [--depth 1]
 //
 // Checks:
 //  1. the page loads: status, jobs and the live WebSocket come up;
@@ -13,6 +13,9 @@
 //     time from the trigger is reported too): the canvas says it drew that cycle and, on the
 //     canvas's own pixels, the grasp point's magenta disc (vision/overlay.hpp) is at the
 //     journal's u_px/v_px (times the page's scale), and not at a point away from the part;
+//     with --depth (a 3D cell): the canvas shows the depth picture, i.e. it states its z
+//     range (data-depth-mm, the legend under it) and its colour bar at the right edge runs
+//     from red (near, top) to blue (far, bottom) on the canvas's pixels;
 //  3. the cycles table equals the journal, field by field, for every row it shows;
 //  4. the page's "Trigger a cycle" from this browser (127.0.0.1, not in web.allowed_clients)
 //     is refused with 403 and no operator cycle runs; the same POST from --allowed (a second
@@ -98,7 +101,13 @@ try {
         for (let dy = -2; dy <= 2; ++dy) for (let dx = -2; dx <= 2; ++dx) hit += magenta(at(x + dx, y + dy)) ? 1 : 0;
         // A point well away from the part (60 px image px, inside the canvas): no disc there.
         const ax = x + (x > c.width / 2 ? -60 : 60) * s, ay = y + (y > c.height / 2 ? -60 : 60) * s;
-        return { drawn: Number(c.dataset.cycle), hit, away: magenta(at(ax, ay)), w: c.width, h: c.height };
+        // The depth picture's colour bar (vision/overlay.hpp): at the right edge, half the
+        // height, centred; 1 px inside its ends.
+        const barW = Math.max(10, Math.floor(c.width / 48)), barH = Math.max(32, Math.floor(c.height / 2));
+        const barX = c.width - 4 - barW + Math.floor(barW / 2), top = Math.floor((c.height - barH) / 2);
+        return { drawn: Number(c.dataset.cycle), hit, away: magenta(at(ax, ay)), w: c.width, h: c.height,
+                 depthMm: c.dataset.depthMm, legend: document.getElementById('live-legend').textContent,
+                 barTop: Array.from(at(barX, top + 1)), barBottom: Array.from(at(barX, top + barH - 2)) };
       }, [j.cycle, p.u_px, p.v_px]);
       if (state.drawn > j.cycle) break;          // already past it: a newer cycle is up (too fast to see)
       if (state.drawn === j.cycle && state.hit >= 9) break;
@@ -109,10 +118,19 @@ try {
       out.latencies_ms.push(now - Math.round(j.time * 1000));
       out.latencies_after_result_ms.push(now - Math.round(j.time * 1000 + j.total_ms));
       if (state.away) fail(`cycle ${j.cycle}: magenta away from the part too (the canvas is not showing a grasp point)`);
+      if (!args.depth && state.depthMm) fail(`cycle ${j.cycle}: a 2D picture states a depth range (${state.depthMm})`);
+      if (args.depth) {
+        const [r0, g0, b0] = state.barTop, [r1, g1, b1] = state.barBottom;
+        if (!/^[0-9.]+,[0-9.]+$/.test(state.depthMm || '')) fail(`cycle ${j.cycle}: the canvas states no depth range (data-depth-mm '${state.depthMm}')`);
+        if (!state.legend.startsWith('depth frame: ')) fail(`cycle ${j.cycle}: no depth legend under the picture ('${state.legend}')`);
+        if (!(r0 > 80 && r0 > g0 + 50 && r0 > b0 + 50)) fail(`cycle ${j.cycle}: the colour bar's top is not red (near): rgb ${state.barTop}`);
+        if (!(b1 > g1 + 20 && b1 >= r1)) fail(`cycle ${j.cycle}: the colour bar's bottom is not blue (far): rgb ${state.barBottom}`);
+        out.depth_mm = state.depthMm;
+      }
       seen.push(j.cycle);
       if (args.shots && seen.length === 1) {  // the live image of an OK cycle, for docs/
         fs.mkdirSync(args.shots, { recursive: true });
-        await (await page.$('#live')).screenshot({ path: path.join(args.shots, 'commissioning-live.png') });
+        await (await page.$('#live')).screenshot({ path: path.join(args.shots, args.depth ? 'commissioning-live-3d.png' : 'commissioning-live.png') });
       }
     } else if (state.drawn > j.cycle) {
       continue;  // not counted: the next one is checked
@@ -188,7 +206,7 @@ try {
   if (args.shots) {
     fs.mkdirSync(args.shots, { recursive: true });
     await sleep(300);
-    await page.screenshot({ path: path.join(args.shots, 'commissioning-page.png'), fullPage: true });
+    await page.screenshot({ path: path.join(args.shots, args.depth ? 'commissioning-page-3d.png' : 'commissioning-page.png'), fullPage: true });
   }
   if (consoleErrors.length) fail('script errors on the page: ' + consoleErrors.join('; '));
   exitCode = failures.length ? 1 : 0;

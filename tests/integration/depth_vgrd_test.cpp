@@ -9,9 +9,11 @@
 //    (Before this change the first started and answered -2 on every cycle.)
 //  - A scene without a part answers 1 NO_PART_FOUND to the PLC and a robot, journalled.
 //  - Eye-in-hand: the flange pose sent with TRIG moves the 3D result exactly as the robot moved.
+//  - The operator page's picture of a 3D cycle: the depth frame in false colour (last test).
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -25,14 +27,17 @@
 #include <nlohmann/json.hpp>
 
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "config/depth_dataset.hpp"
+#include "depth_cell.hpp"
 #include "sim/depth_scene.hpp"
 #include "tests/support/command.hpp"
 #include "tests/support/handeye_file.hpp"
 #include "tests/support/raw_tcp_client.hpp"
 #include "tests/support/sim_cell.hpp"
 #include "tools/vgr/demo3d.hpp"
+#include "vision/depth_image.hpp"
 
 namespace {
 
@@ -50,39 +55,7 @@ std::string readText(const fs::path& p) {
   return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
-class depth_vgrd : public vgr::test::SimCell {
- protected:
-  // The example 3D cell with `scenes` rendered scenes in dir_ (config, hand-eye, 3D job).
-  void prepare3dCell(int scenes, const vgr::tools::Demo3dScenes& choice = {}, std::uint64_t seed = 3) {
-    for (const int port : {kModbusPort, kUrPort, kAbbPort, kFanucPort})
-      ASSERT_TRUE(portFree(port)) << "127.0.0.1:" << port << " is taken: another cell is running on this machine";
-    dir_ = fs::temp_directory_path() / ("vgr-cell3d-" + std::to_string(::getpid()) + "-" + std::to_string(counter_++));
-    fs::create_directories(dir_);
-    auto config = vgr::tools::prepareDemo3d(dir_.string(), scenes, seed, choice);
-    ASSERT_TRUE(config) << config.error().message;
-    configPath_ = *config;
-    auto cfg = vgr::config::loadCellConfig(configPath_);
-    ASSERT_TRUE(cfg) << cfg.error().message;
-    cfg_ = *cfg;
-  }
-  // The depth emulator on dir_/scenes, in `unit`; then vgrd, waited for until READY=1 when
-  // `waitReady` (the 3D job's model features are computed at start: up to a minute loaded).
-  void start3dCell(const std::string& unit, bool waitReady) {
-    camera_ = vgr::test::startEmulator({"--config", configPath_, "--depth", (dir_ / "scenes").string(), "--depth-unit", unit,
-                                        "--truth", (dir_ / "truth.jsonl").string()},
-                                       (dir_ / "camera.log").string(), std::chrono::milliseconds(15000));
-    ASSERT_NE(camera_, nullptr);
-    notify_ = std::make_unique<vgr::test::NotifySocket>((dir_ / "notify.sock").string());
-    auto p = vgr::test::spawnWithNotify({bin("vgrd"), "--config", configPath_, "--journal", journalPath()},
-                                        (dir_ / "vgrd.log").string(), *notify_);
-    ASSERT_TRUE(p.has_value());
-    vgrd_ = std::make_unique<vgr::test::ChildProcess>(std::move(*p));
-    if (waitReady) {
-      ASSERT_TRUE(waitNotify("READY=1", std::chrono::milliseconds(90000))) << log("vgrd.log");
-    }
-  }
-  static inline int counter_ = 0;
-};
+class depth_vgrd : public vgr::test::DepthCell {};
 
 TEST_F(depth_vgrd, a_camera_in_an_unknown_unit_is_refused_and_vgrd_answers_camera_error) {
   ASSERT_NO_FATAL_FAILURE(prepare3dCell(1));
@@ -349,6 +322,159 @@ TEST_F(depth_vgrd, eye_in_hand_two_snapshot_poses_of_one_scene_give_the_same_par
     EXPECT_LE(d, 1.0) << "snapshot " << frame << ": " << j.dump();
     EXPECT_LE(angleDeg, 1.0) << "snapshot " << frame << ": " << j.dump();
   }
+}
+
+}  // namespace
+
+namespace {
+
+// The operator page's picture of a 3D cycle (docs/3d.md "The page's depth picture"), over
+// real HTTP from vgrd on the example 3D cell: /api/live.jpg after a robot's TRIG is the
+// depth frame the emulator served (scene 0 of seed 1, one the localizer finds), in false
+// colour at the frame's size: black where the frame has no data and nowhere else; every
+// other pixel's colour read back through the colour map (cv::COLORMAP_TURBO, the z range
+// the reply states in X-Vgr-Depth-Mm) gives the served z, on the part around its grasp point
+// too; the grasp point's magenta disc at the journal's u_px, v_px. The browser drives the
+// same page on this cell in web_page_browser_test.
+struct HttpReply {
+  int status = 0;
+  std::string head, body;
+  std::string header(const std::string& name) const {
+    const auto at = head.find("\r\n" + name + ": ");
+    if (at == std::string::npos) return "";
+    const auto from = at + name.size() + 4;
+    return head.substr(from, head.find("\r\n", from) - from);
+  }
+};
+
+HttpReply httpGet(int port, const std::string& target) {
+  const std::string r = vgr::test::httpRequest(static_cast<std::uint16_t>(port), "GET", target, 5000ms);
+  HttpReply out;
+  const auto p = r.find("\r\n\r\n");
+  out.head = r.substr(0, p);
+  if (p != std::string::npos) out.body = r.substr(p + 4);
+  if (r.size() > 12) out.status = std::stoi(r.substr(9, 3));
+  return out;
+}
+
+TEST_F(depth_vgrd, the_page_shows_a_3d_cycle_as_its_depth_frame_in_false_colour_with_the_part) {
+  ASSERT_NO_FATAL_FAILURE(prepare3dCell(1, vgr::tools::Demo3dScenes{}, 1));
+  const int port = vgr::test::freeLoopbackPort();
+  ASSERT_GT(port, 0);
+  std::ofstream(configPath_, std::ios::app) << "\nweb:\n  bind: 127.0.0.1\n  port: " << port << "\n";
+  ASSERT_NO_FATAL_FAILURE(start3dCell("Millimeter", true));
+
+  vgr::test::RawTcpClient ur(kUrPort);
+  ASSERT_TRUE(ur.send("TRIG,1\n"));
+  const auto reply = ur.readUntil(')', 40000ms);
+  ASSERT_TRUE(reply) << log("vgrd.log");
+  ASSERT_EQ(urStatus(*reply), 0) << *reply << log("vgrd.log");
+  const auto cycle = static_cast<std::uint32_t>(std::stoul(reply->substr(reply->find(',') + 1)));
+  const auto j = journalEntry(cycle);
+  ASSERT_FALSE(j.is_null());
+  ASSERT_EQ(j["parts"].size(), 1u) << j.dump();
+  const double u = j["parts"][0]["u_px"].get<double>(), v = j["parts"][0]["v_px"].get<double>();
+
+  const HttpReply live = httpGet(port, "/api/live.jpg");
+  ASSERT_EQ(live.status, 200) << live.head << live.body;
+  EXPECT_EQ(live.header("Content-Type"), "image/jpeg");
+  EXPECT_EQ(live.header("X-Vgr-Cycle"), std::to_string(cycle));
+  const std::string rangeText = live.header("X-Vgr-Depth-Mm");
+  ASSERT_NE(rangeText.find(','), std::string::npos) << live.head;
+  const double nearMm = std::stod(rangeText), farMm = std::stod(rangeText.substr(rangeText.find(',') + 1));
+  ASSERT_GT(farMm, nearMm + 1) << rangeText;
+  const std::vector<uchar> jpeg(live.body.begin(), live.body.end());
+  const cv::Mat pic = cv::imdecode(jpeg, cv::IMREAD_COLOR);
+  ASSERT_FALSE(pic.empty()) << "the live picture does not decode as a JPEG";
+  if (const char* shots = std::getenv("VGR_WEB_SHOTS")) {  // docs/img/commissioning-live-3d.jpg was saved so
+    fs::create_directories(shots);
+    std::ofstream(fs::path(shots) / "commissioning-live-3d.jpg", std::ios::binary) << live.body;
+  }
+
+  // The frame the emulator served (frame 1 = scene 0), in mm.
+  auto cam = vgr::config::loadDepthCameraFile((dir_ / "scenes" / "camera.yaml").string());
+  ASSERT_TRUE(cam) << cam.error().message;
+  auto depth = vgr::vision::readDepthMm((dir_ / "scenes" / "images" / "0000.png").string(), cam->depthScaleMm, cam->width,
+                                        cam->height);
+  ASSERT_TRUE(depth) << depth.error().message;
+  EXPECT_EQ(pic.cols, cam->width);  // the frame's size (640 px: below web.live_max_width, not scaled)
+  EXPECT_EQ(pic.rows, cam->height);
+  EXPECT_EQ(live.header("X-Vgr-Scale"), "1.000000");
+  ASSERT_EQ(pic.size(), depth->size());
+
+  // The stated range spans the served z (the 0.5th..99.5th percentile: within its extremes,
+  // at least 98 % of the valid pixels inside).
+  const cv::Mat valid = *depth > 0;
+  double lo = 0, hi = 0;
+  cv::minMaxLoc(*depth, &lo, &hi, nullptr, nullptr, valid);
+  EXPECT_GE(nearMm, lo - 1);
+  EXPECT_LE(farMm, hi + 1);
+  const cv::Mat inside = valid & (*depth >= nearMm - 0.5) & (*depth <= farMm + 0.5);
+  EXPECT_GE(cv::countNonZero(inside), 0.98 * cv::countNonZero(valid));
+
+  // Every pixel read back: black where there is no data, else the map's entry nearest its
+  // colour -> z. Away from depth edges (JPEG smears them), the caption banner (top 40 px)
+  // and the colour bar (right 110 px). The map is the test's own (cv::applyColorMap).
+  cv::Mat ramp(256, 1, CV_8UC1), table;
+  for (int i = 0; i < 256; ++i) ramp.at<uchar>(i) = static_cast<uchar>(i);
+  cv::applyColorMap(ramp, table, cv::COLORMAP_TURBO);
+  auto readZ = [&](const cv::Vec3b& c) {
+    int best = 0, bestD = 1 << 30;
+    for (int i = 0; i < 256; ++i) {
+      const cv::Vec3b t = table.at<cv::Vec3b>(i);
+      const int d = (c[0] - t[0]) * (c[0] - t[0]) + (c[1] - t[1]) * (c[1] - t[1]) + (c[2] - t[2]) * (c[2] - t[2]);
+      if (d < bestD) bestD = d, best = i;
+    }
+    return farMm - best / 255.0 * (farMm - nearMm);
+  };
+  cv::Mat dz, gray;
+  cv::morphologyEx(*depth, dz, cv::MORPH_GRADIENT, cv::Mat::ones(7, 7, CV_8UC1));  // max - min around each pixel
+  const cv::Mat smooth = valid & (dz < 3.0);
+  cv::cvtColor(pic, gray, cv::COLOR_BGR2GRAY);
+  const double tolMm = 0.04 * (farMm - nearMm);  // ~10 of the map's 256 entries: JPEG's colour error
+  int blackChecked = 0, blackOk = 0, zChecked = 0, zOk = 0, partChecked = 0, partOk = 0;
+  double partZ = 0;
+  for (int y = 40; y < pic.rows; y += 2)
+    for (int x = 0; x < pic.cols - 110; x += 2) {
+      const cv::Vec3b c = pic.at<cv::Vec3b>(y, x);
+      if (!valid.at<uchar>(y, x)) {
+        // The frame's pixels without data are single dropouts and the rims of depth edges
+        // here: black, so darker than the pixels 2 px around (JPEG softens a lone black pixel).
+        if (y < 42 || x < 2 || y >= pic.rows - 2) continue;
+        const int around = (gray.at<uchar>(y - 2, x) + gray.at<uchar>(y + 2, x) + gray.at<uchar>(y, x - 2) +
+                            gray.at<uchar>(y, x + 2)) / 4;
+        ++blackChecked;
+        blackOk += gray.at<uchar>(y, x) + 20 < around || gray.at<uchar>(y, x) < 20;
+        continue;
+      }
+      if (!smooth.at<uchar>(y, x) || !inside.at<uchar>(y, x)) continue;
+      const float z = depth->at<float>(y, x);
+      const bool ok = std::abs(readZ(c) - z) <= tolMm;
+      ++zChecked;
+      zOk += ok;
+      // The part around its grasp point: 12..30 px out (outside the disc; the axes and the
+      // label cross a few of these pixels).
+      const double r = std::hypot(x - u, y - v);
+      if (r >= 12 && r <= 30) {
+        ++partChecked;
+        partOk += ok;
+        partZ += z;
+      }
+    }
+  std::printf("depth picture: range %.1f..%.1f mm (frame %.1f..%.1f); no data black %d/%d; z read back within %.1f mm "
+              "%d/%d; around the part (mean z %.1f mm) %d/%d\n",
+              nearMm, farMm, lo, hi, blackOk, blackChecked, tolMm, zOk, zChecked, partChecked ? partZ / partChecked : 0.0,
+              partOk, partChecked);
+  EXPECT_GT(blackChecked, 50) << "the served frame has pixels without data";
+  EXPECT_GE(blackOk, 0.8 * blackChecked) << "no data is black";
+  EXPECT_GT(zChecked, 20000) << "not blank: most of the frame is valid z";
+  EXPECT_GE(zOk, 0.95 * zChecked) << "the colours say the served z";
+  EXPECT_GT(partChecked, 100);
+  EXPECT_GE(partOk, 0.8 * partChecked) << "the colour where the part is says the part's z";
+  // The grasp point's magenta disc at the journal's u_px, v_px.
+  const cv::Vec3b g = pic.at<cv::Vec3b>(static_cast<int>(std::lround(v)), static_cast<int>(std::lround(u)));
+  EXPECT_TRUE(g[0] > 180 && g[1] < 90 && g[2] > 180) << g;
+  EXPECT_TRUE(vgrd_->running());
 }
 
 }  // namespace

@@ -7,12 +7,19 @@
 // page's trigger from 127.0.0.1 is refused (403) while the same POST from 127.0.0.2 runs.
 // Its JSON report is checked here. VGR_WEB_SHOTS=DIR also writes the page's screenshots
 // to DIR (docs/img/ was made so).
+// The same on the simulated 3D cell (config/examples/sim-cell-3d.yaml, robot triggers):
+// each 3D cycle's picture is its depth frame in false colour (docs/3d.md "The page's depth
+// picture"), with the disc at the journal's grasp point, the stated z range and the colour
+// bar (page_check.mjs --depth 1).
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 
+#include "depth_cell.hpp"
 #include "modbus_cell.hpp"
 #include "tests/support/command.hpp"
 #include "tests/support/raw_tcp_client.hpp"
+#include "tools/vgr/demo3d.hpp"
 
 namespace {
 
@@ -80,6 +87,62 @@ TEST_F(web_page_browser, NewCycleOverlayWithinASecondTableEqualsJournalOutsiderR
   EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(shots) / "commissioning-page.png"));
   EXPECT_NE(log("vgrd.log").find("operator trigger refused: 127.0.0.1 is not in web.allowed_clients"), std::string::npos)
       << log("vgrd.log");
+}
+
+class web_page_browser_3d : public vgr::test::DepthCell {};
+
+TEST_F(web_page_browser_3d, EachDepthPictureOnTheCanvasWithinASecondTableEqualsJournal) {
+  const std::string node = std::filesystem::exists("/usr/bin/node") ? "/usr/bin/node" : "node";
+  const std::string script = vgr::test::sourcePath("tests/browser/page_check.mjs");
+  ASSERT_TRUE(std::filesystem::exists(vgr::test::sourcePath("tests/browser/node_modules/playwright-core/package.json")))
+      << "playwright-core is not installed: scripts/install-deps.sh runs 'npm ci' in tests/browser";
+  ASSERT_TRUE(std::filesystem::exists("/usr/bin/chromium")) << "Debian's chromium: scripts/install-deps.sh installs it";
+
+  // Scene 0 of seed 1 (the demo's first): one the localizer finds (docs/demo.md "3D").
+  ASSERT_NO_FATAL_FAILURE(prepare3dCell(1, vgr::tools::Demo3dScenes{}, 1));
+  const int port = vgr::test::freeLoopbackPort();
+  ASSERT_GT(port, 0);
+  std::ofstream(configPath_, std::ios::app) << "\nweb:\n  bind: 127.0.0.1\n  port: " << port
+                                            << "\n  actions: true\n  allowed_clients: [127.0.0.2]\n";
+  ASSERT_NO_FATAL_FAILURE(start3dCell("Millimeter", true));
+
+  const char* shotsEnv = std::getenv("VGR_WEB_SHOTS");
+  const std::string shots = shotsEnv ? shotsEnv : (dir_ / "shots").string();
+  constexpr int kChecked = 3;
+  auto p = vgr::test::ChildProcess::spawn({node, script, "--url", "http://127.0.0.1:" + std::to_string(port) + "/", "--journal",
+                                           journalPath(), "--cycles", std::to_string(kChecked), "--allowed", "127.0.0.2",
+                                           "--shots", shots, "--depth", "1"},
+                                          (dir_ / "browser.log").string());
+  ASSERT_TRUE(p.has_value());
+  ASSERT_TRUE(p->waitForLine("READY", 60s)) << log("browser.log") << log("vgrd.log");
+
+  // Robot cycles (a 3D cell's robots trigger), 700 ms apart after each answer.
+  vgr::test::RawTcpClient ur(kUrPort);
+  for (int i = 1; i <= 2 * kChecked; ++i) {
+    ASSERT_TRUE(ur.send("TRIG,1\n"));
+    const auto reply = ur.readUntil(')', 40000ms);
+    ASSERT_TRUE(reply) << log("vgrd.log");
+    EXPECT_EQ(reply->rfind("(0,", 0), 0u) << "cycle " << i << ": " << *reply;
+    std::this_thread::sleep_for(700ms);
+  }
+
+  std::string report;
+  for (auto line = p->readLine(60s); line; line = p->readLine(60s))
+    if (!line->empty() && line->front() == '{') report = *line;
+  const int rc = p->wait(10s);
+  const auto j = nlohmann::json::parse(report, nullptr, false);
+  ASSERT_TRUE(j.is_object()) << "no report from the browser script\n" << log("browser.log");
+  std::printf("browser: %s\n", report.c_str());
+  EXPECT_TRUE(j["failures"].empty()) << j["failures"].dump(2) << "\n" << log("browser.log");
+  EXPECT_EQ(rc, 0) << log("browser.log");
+  ASSERT_GE(j["latencies_after_result_ms"].size(), static_cast<std::size_t>(kChecked));
+  for (const auto& l : j["latencies_after_result_ms"]) EXPECT_LT(l.get<double>(), 1000.0) << "cycle's result -> picture on the canvas";
+  EXPECT_TRUE(j.contains("depth_mm")) << "the script checked no depth picture";
+  EXPECT_GE(j["rows_checked"].get<int>(), kChecked);
+  EXPECT_EQ(j["refused_status"], 403);
+  EXPECT_EQ(j["allowed_status"], 200);
+  EXPECT_EQ(j["operator_cycles"], 1);
+  EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(shots) / "commissioning-page-3d.png"));
 }
 
 }  // namespace
