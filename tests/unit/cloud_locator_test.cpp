@@ -222,6 +222,27 @@ TEST(Locator3d, ClusterSearchFindsBenchScene100OfEachPart) {
   }
 }
 
+// Orientation (issue 13's 0.5 deg mean, issue 14's 1 deg bar): the bench scenes whose turn
+// about the view axis was off the most, each within 1 deg and 1 mm. Before the degeneracy-
+// aware refinement and the sub-pixel silhouette alignment: housing 123 1.98 deg (the final
+// ICP turned it 0.1 -> 3.9 deg), bracket 105 1.15 deg, bracket 127 1.52 deg; after 0.1-0.6.
+// Housing 139: no candidate consistent with the view among the 3 best hypotheses (the near-
+// truth one ranks lower); the second round finds it (docs/3d.md "Recall and speed").
+TEST(Locator3d, BenchScenesWithinOneDegreeAndSecondRoundRecall) {
+  const std::pair<const char*, int> cases[] = {{"housing", 123}, {"bracket", 105}, {"bracket", 127}, {"housing", 139}};
+  for (const auto& [part, scene] : cases) {
+    auto loc = vision::cloud::makeLocator3d(modelOf(part), Pose{}, Search3dParams{});
+    ASSERT_TRUE(loc.has_value()) << loc.error().message;
+    sim::DepthSceneOptions o;
+    o.part = part;
+    const Tally t = run(**loc, o, scene, 1);
+    EXPECT_EQ(t.wrong, 0) << part << " " << scene;
+    EXPECT_EQ(t.correct, 1) << part << " " << scene << ": retry " << t.retry << ", not found " << t.notFound;
+    EXPECT_LE(t.worstMm, 1) << part << " " << scene;
+    EXPECT_LE(t.worstDeg, 1) << part << " " << scene;
+  }
+}
+
 TEST(Locator3d, NoPoseOnEmptyScenes) {
   auto loc = vision::cloud::makeLocator3d(modelOf("housing"), Pose{}, testParams());
   ASSERT_TRUE(loc.has_value());

@@ -262,6 +262,153 @@ Eigen::Matrix4d VisibilityCheck::alignToBoundaries(const Eigen::Matrix4d& start,
   return t;
 }
 
+Eigen::Matrix4d VisibilityCheck::alignToEdges(const Eigen::Matrix4d& start, const Eigen::Vector3d& modelCentroid, double radiusMm,
+                                              const std::vector<Eigen::Matrix<double, 6, 1>>& directions,
+                                              const std::vector<double>& stiffness, const cv::Mat& depth, const DepthIntrinsics& k,
+                                              double maxAngleDeg, double edgeSigmaPx, const cv::Mat& claimed) {
+  constexpr double kJumpMm = 3, kTruncPx = 3;
+  constexpr int kMarginPx = 12;
+  const std::vector<std::size_t> sel = visibleSet(start, depth, k, maxAngleDeg);
+  if (sel.size() < 20 || directions.empty()) return start;
+  const int w = depth.cols, h = depth.rows;
+  // The model's contour: visible points with an empty or much deeper model pixel 2 px away.
+  int u0 = w, u1 = -1, v0 = h, v1 = -1;  // the z-buffer's valid box (visibleSet fills only the front points' box)
+  std::vector<std::size_t> rim;
+  {
+    std::map<std::size_t, std::pair<int, int>> px;
+    for (const auto& f : front_) {
+      const int u = static_cast<int>(f[0]), v = static_cast<int>(f[1]);
+      px[static_cast<std::size_t>(f[3])] = {u, v};
+      u0 = std::min(u0, u), u1 = std::max(u1, u), v0 = std::min(v0, v), v1 = std::max(v1, v);
+    }
+    const int off[8][2] = {{2, 0}, {-2, 0}, {0, 2}, {0, -2}, {2, 2}, {-2, -2}, {2, -2}, {-2, 2}};
+    for (std::size_t i : sel) {
+      const auto [u, v] = px[i];
+      const float zc = zbuf_.at<float>(v, u);
+      bool edge = false;
+      for (const auto& o : off) {
+        const int x = u + o[0], y = v + o[1];
+        if (x < u0 || y < v0 || x > u1 || y > v1) { edge = true; break; }
+        const float zn = zbuf_.at<float>(y, x);
+        if (!std::isfinite(zn) || zn > zc + kJumpMm) { edge = true; break; }
+      }
+      if (edge) rim.push_back(i);
+    }
+  }
+  if (rim.size() < 20) return start;
+  // The measured edges around the part and their distance transform.
+  const cv::Rect box = cv::Rect(u0 - kMarginPx, v0 - kMarginPx, u1 - u0 + 1 + 2 * kMarginPx, v1 - v0 + 1 + 2 * kMarginPx) & cv::Rect(0, 0, w, h);
+  edges_.create(box.height, box.width, CV_8UC1);
+  edges_.setTo(255);  // distanceTransform: distance to the nearest 0
+  auto z = [&](int x, int y) -> double { return depth.at<float>(y, x); };
+  auto bandInvalid = [&](int x, int y) {  // an invalid pixel with >= 2 invalid 8-neighbours (not isolated dropout)
+    if (z(x, y) > 0) return false;
+    int n = 0;
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int xx = x + dx, yy = y + dy;
+        if ((dx || dy) && xx >= 0 && yy >= 0 && xx < w && yy < h && !(z(xx, yy) > 0)) ++n;
+      }
+    return n >= 2;
+  };
+  for (int y = box.y; y < box.y + box.height; ++y)
+    for (int x = box.x; x < box.x + box.width; ++x) {
+      const double zc = z(x, y);
+      if (!(zc > 0)) continue;
+      if (!claimed.empty() && claimed.at<std::uint8_t>(y, x) != kPixelFree) continue;
+      bool edge = false;
+      for (int dy = -1; dy <= 1 && !edge; ++dy)
+        for (int dx = -1; dx <= 1 && !edge; ++dx) {
+          const int xx = x + dx, yy = y + dy;
+          if (!(dx || dy) || xx < 0 || yy < 0 || xx >= w || yy >= h) continue;
+          const double zn = z(xx, yy);
+          if (zn > zc + kJumpMm) edge = true;
+          else if (!(zn > 0) && bandInvalid(xx, yy)) {
+            // across the band: deeper or nothing valid 3 px on -> this pixel is the near side
+            const int x3 = std::clamp(x + 3 * dx, 0, w - 1), y3 = std::clamp(y + 3 * dy, 0, h - 1);
+            const double zf = z(x3, y3);
+            edge = !(zf > 0) || zf > zc + kJumpMm;
+          }
+        }
+      if (edge) edges_.at<std::uint8_t>(y - box.y, x - box.x) = 0;
+    }
+  cv::distanceTransform(edges_, edgeDist_, cv::DIST_L2, cv::DIST_MASK_PRECISE, CV_32F);
+  auto dist = [&](double u, double v) {  // bilinear, in px, truncated
+    const double x = u - box.x, y = v - box.y;
+    if (x < 0 || y < 0 || x >= box.width - 1 || y >= box.height - 1) return kTruncPx;
+    const int xi = static_cast<int>(x), yi = static_cast<int>(y);
+    const double fx = x - xi, fy = y - yi;
+    const double d = (1 - fy) * ((1 - fx) * edgeDist_.at<float>(yi, xi) + fx * edgeDist_.at<float>(yi, xi + 1)) +
+                     fy * ((1 - fx) * edgeDist_.at<float>(yi + 1, xi) + fx * edgeDist_.at<float>(yi + 1, xi + 1));
+    return std::min(d, kTruncPx);
+  };
+  const std::size_t nd = directions.size();
+  auto pose = [&](const Eigen::VectorXd& a) {
+    Eigen::Matrix<double, 6, 1> m = Eigen::Matrix<double, 6, 1>::Zero();
+    for (std::size_t i = 0; i < nd; ++i) m += a[static_cast<Eigen::Index>(i)] * directions[i];
+    const Eigen::Vector3d c = (start * modelCentroid.homogeneous()).head<3>();
+    const Eigen::Vector3d rv = m.head<3>() / radiusMm;
+    Eigen::Matrix4d d = Eigen::Matrix4d::Identity();
+    if (rv.norm() > 0) {
+      const Eigen::Matrix3d rot = Eigen::AngleAxisd(rv.norm(), rv.normalized()).toRotationMatrix();
+      d.topLeftCorner<3, 3>() = rot;
+      d.topRightCorner<3, 1>() = c - rot * c;
+    }
+    d.topRightCorner<3, 1>() += m.tail<3>();
+    return Eigen::Matrix4d(d * start);
+  };
+  auto residuals = [&](const Eigen::Matrix4d& t) {
+    Eigen::VectorXd r(static_cast<Eigen::Index>(rim.size()));
+    const Eigen::Matrix3d rr = t.topLeftCorner<3, 3>();
+    const Eigen::Vector3d tr = t.topRightCorner<3, 1>();
+    for (std::size_t j = 0; j < rim.size(); ++j) {
+      const Eigen::Vector3d p = rr * points_[rim[j]] + tr;
+      r[static_cast<Eigen::Index>(j)] = dist(k.fx * p.x() / p.z() + k.cx, k.fy * p.y() / p.z() + k.cy) / edgeSigmaPx;
+    }
+    return r;
+  };
+  Eigen::VectorXd a = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(nd));
+  auto total = [&](const Eigen::VectorXd& x, const Eigen::VectorXd& r) {
+    double e = r.squaredNorm();
+    for (std::size_t i = 0; i < nd; ++i) e += (i < stiffness.size() ? stiffness[i] : 0.0) * x[static_cast<Eigen::Index>(i)] * x[static_cast<Eigen::Index>(i)];
+    return e;
+  };
+  Eigen::VectorXd r = residuals(pose(a));
+  double e = total(a, r);
+  const double hStep = 0.05;  // mm along a direction, numeric derivative
+  for (int it = 0; it < 15; ++it) {
+    Eigen::MatrixXd jac(r.size(), static_cast<Eigen::Index>(nd));
+    for (std::size_t i = 0; i < nd; ++i) {
+      Eigen::VectorXd ap = a, am = a;
+      ap[static_cast<Eigen::Index>(i)] += hStep;
+      am[static_cast<Eigen::Index>(i)] -= hStep;
+      jac.col(static_cast<Eigen::Index>(i)) = (residuals(pose(ap)) - residuals(pose(am))) / (2 * hStep);
+    }
+    Eigen::MatrixXd hm = jac.transpose() * jac;
+    Eigen::VectorXd g = jac.transpose() * r;
+    for (std::size_t i = 0; i < nd; ++i) {
+      const double s = i < stiffness.size() ? stiffness[i] : 0.0;
+      hm(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(i)) += s + 1e-6;
+      g[static_cast<Eigen::Index>(i)] += s * a[static_cast<Eigen::Index>(i)];
+    }
+    Eigen::VectorXd step = hm.ldlt().solve(-g);
+    if (!step.allFinite()) break;
+    if (step.norm() > 1.0) step *= 1.0 / step.norm();  // at most 1 mm per iteration
+    bool took = false;
+    for (int half = 0; half < 5 && !took; ++half, step *= 0.5) {
+      const Eigen::VectorXd a2 = a + step;
+      const Eigen::VectorXd r2 = residuals(pose(a2));
+      const double e2 = total(a2, r2);
+      if (e2 < e) {
+        a = a2, r = r2, e = e2;
+        took = true;
+      }
+    }
+    if (!took || step.norm() < 1e-3) break;
+  }
+  return pose(a);
+}
+
 void VisibilityCheck::claim(const Eigen::Matrix4d& t, const cv::Mat& depth, const DepthIntrinsics& k, double tol,
                             double maxAngleDeg, cv::Mat& claimed) {
   if (claimed.rows != depth.rows || claimed.cols != depth.cols) claimed = cv::Mat::zeros(depth.size(), CV_8UC1);

@@ -81,6 +81,18 @@ class VisibilityCheck {
                                     const cv::Mat& depthMm,
                                     const DepthIntrinsics& k, double toleranceMm, double visibleMaxAngleDeg,
                                     const cv::Mat& claimed = cv::Mat());
+  // Sub-pixel silhouette alignment (docs/3d.md "Orientation"): the model's occluding contour
+  // at camFromModel (visible model points next to an empty or >= 3 mm deeper pixel of the
+  // model's own z-buffer) is pulled onto the measured depth edges (valid pixels next to a
+  // depth jump of >= 3 mm or to a jump's invalid band, isolated dropout pixels ignored) by
+  // Gauss-Newton on the squared, bilinearly interpolated distance transform of those edges
+  // (truncated at 3 px), along `directions` with ICP's `stiffness` as a prior (as in
+  // alignToBoundaries). The boundary cost above works on whole pixels: on flat parts seen
+  // from above its turn about the view axis was 1-2 deg off (bracket scenes 105 / 134).
+  Eigen::Matrix4d alignToEdges(const Eigen::Matrix4d& camFromModel, const Eigen::Vector3d& modelCentroid, double radiusMm,
+                               const std::vector<Eigen::Matrix<double, 6, 1>>& directions, const std::vector<double>& stiffness,
+                               const cv::Mat& depthMm, const DepthIntrinsics& k, double visibleMaxAngleDeg, double edgeSigmaPx,
+                               const cv::Mat& claimed = cv::Mat());
   // Marks in `claimed` (CV_8UC1, image size) the pixels where the model under camFromModel is
   // what the sensor sees (matched points, splatted to their spacing).
   void claim(const Eigen::Matrix4d& camFromModel, const cv::Mat& depthMm, const DepthIntrinsics& k, double toleranceMm,
@@ -90,6 +102,7 @@ class VisibilityCheck {
   std::vector<Eigen::Vector3d> points_, normals_;
   double spacingMm_;
   cv::Mat zbuf_;  // scratch: the model's own z-buffer
+  cv::Mat edges_, edgeDist_;  // scratch: alignToEdges' measured edges and their distance transform
   cv::Mat ringIn_, ringNear_;  // scratch: the silhouette ring (check())
   std::vector<Eigen::Vector4d> front_;  // scratch: u, v, z, index of the front-facing points
   // Front-facing points in the image not hidden by the model itself (indices); fills front_, zbuf_.

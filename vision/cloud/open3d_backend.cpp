@@ -455,7 +455,7 @@ IcpTarget::IcpTarget(const PointSet& target) : impl_(std::make_unique<Impl>()) {
 IcpTarget::~IcpTarget() = default;
 
 Registration IcpTarget::align(const PointSet& source, double maxDist, double maxAngleDeg, const Eigen::Matrix4d& init,
-                              int iterations, const Eigen::Vector3d& pivot) const {
+                              int iterations, const Eigen::Vector3d& pivot, double minEigenShare) const {
   Registration out;
   out.transform = init;
   const auto& sp = source.points();
@@ -483,17 +483,38 @@ Registration IcpTarget::align(const PointSet& source, double maxDist, double max
     Eigen::Matrix<double, 6, 6> jtj = Eigen::Matrix<double, 6, 6>::Zero();
     Eigen::Matrix<double, 6, 1> jtr = Eigen::Matrix<double, 6, 1>::Zero();
     std::size_t n = 0;
+    double arm2 = 0;
+    // Rotation about the pivot (the model's centroid): p' = R (p - c) + c + t.
     pairUp(t, [&](const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& nq, double) {
       Eigen::Matrix<double, 6, 1> j;
-      j.head<3>() = p.cross(nq);
+      j.head<3>() = (p - pivot).cross(nq);
       j.tail<3>() = nq;
       const double res = (p - q).dot(nq);
       jtj.noalias() += j * j.transpose();
       jtr.noalias() += j * res;
+      arm2 += (p - pivot).squaredNorm();
       ++n;
     });
     if (n < 6) break;
-    Eigen::Matrix<double, 6, 1> x = jtj.ldlt().solve(-jtr);
+    Eigen::Matrix<double, 6, 1> x;
+    if (minEigenShare > 0) {
+      // Degeneracy-aware step (header): in scaled parameters (rotation x arm, mm) solve only
+      // along the well-determined eigen-directions.
+      const double arm = std::max(1.0, std::sqrt(arm2 / static_cast<double>(n)));
+      Eigen::Matrix<double, 6, 1> sc;
+      sc << 1 / arm, 1 / arm, 1 / arm, 1, 1, 1;
+      const Eigen::Matrix<double, 6, 6> a = sc.asDiagonal() * jtj * sc.asDiagonal();
+      const Eigen::Matrix<double, 6, 1> g = sc.asDiagonal() * jtr;
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eig(a);
+      const double top = eig.eigenvalues()[5];
+      Eigen::Matrix<double, 6, 1> y = Eigen::Matrix<double, 6, 1>::Zero();
+      for (int e = 0; e < 6; ++e)
+        if (eig.eigenvalues()[e] > minEigenShare * top && eig.eigenvalues()[e] > 0)
+          y -= eig.eigenvectors().col(e) * (eig.eigenvectors().col(e).dot(g) / eig.eigenvalues()[e]);
+      x = sc.asDiagonal() * y;
+    } else {
+      x = jtj.ldlt().solve(-jtr);
+    }
     if (!x.allFinite()) break;
     // A step longer than half the pairing distance (or 5 deg) is cut to it: with few pairs or
     // one dominant plane, J^T J is near singular along the plane and an unclamped
@@ -504,7 +525,7 @@ Registration IcpTarget::align(const PointSet& source, double maxDist, double max
     Eigen::Matrix4d step = Eigen::Matrix4d::Identity();
     const double angle = x.head<3>().norm();
     if (angle > 0) step.topLeftCorner<3, 3>() = Eigen::AngleAxisd(angle, x.head<3>() / angle).toRotationMatrix();
-    step.topRightCorner<3, 1>() = x.tail<3>();
+    step.topRightCorner<3, 1>() = pivot - step.topLeftCorner<3, 3>() * pivot + x.tail<3>();
     t = step * t;
     if (x.tail<3>().norm() < 1e-3 && angle < 1e-6) break;
   }
