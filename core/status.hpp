@@ -27,6 +27,15 @@ enum class Status : std::int16_t {
   NotPermitted = -10,  // a control request (robot JOB/TRIG) from an address not in control_clients
 };
 
+// Every status, in the table's order: the one list that code enumerating statuses (the
+// metrics' series, tests) uses, so a new status cannot be forgotten there (status_test checks
+// it against statusName).
+inline constexpr Status kAllStatuses[] = {
+    Status::Ok,           Status::NoPartFound,     Status::ResultNotReady,    Status::NoNewTrigger,
+    Status::RetryNewViewpoint, Status::UnknownCommand, Status::BadArgument,   Status::BusyOverrun,
+    Status::CameraError,  Status::ProcessingTimeout, Status::NotCalibrated,   Status::JobNotFound,
+    Status::Internal,     Status::OffsetOutOfLimits, Status::NotPermitted};
+
 // Upper-case name as in the table ("CAMERA_ERROR").
 std::string_view statusName(Status s);
 constexpr int statusCode(Status s) { return static_cast<int>(s); }

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <iterator>
 #include <map>
 #include <sstream>
 
@@ -18,18 +19,18 @@ namespace vgr::daemon {
 
 namespace {
 
-constexpr Status kStatuses[] = {Status::Ok,          Status::NoPartFound,       Status::ResultNotReady,
-                                Status::NoNewTrigger, Status::RetryNewViewpoint, Status::UnknownCommand,    Status::BadArgument,
-                                Status::BusyOverrun,  Status::CameraError,       Status::ProcessingTimeout,
-                                Status::NotCalibrated, Status::JobNotFound,      Status::Internal,
-                                Status::OffsetOutOfLimits};
-constexpr std::size_t kStatusCount = sizeof kStatuses / sizeof kStatuses[0];
+constexpr std::size_t kStatusCount = std::size(kAllStatuses);
 constexpr TriggerSource kSources[] = {TriggerSource::Modbus, TriggerSource::Robot, TriggerSource::Operator};
 
+// Index of a status in kAllStatuses (a value outside the enum counts as INTERNAL, as statusName
+// names it).
 std::size_t statusIndex(Status s) {
-  for (std::size_t i = 0; i < kStatusCount; ++i)
-    if (kStatuses[i] == s) return i;
-  return kStatusCount - 2;  // Internal
+  std::size_t internal = 0;
+  for (std::size_t i = 0; i < kStatusCount; ++i) {
+    if (kAllStatuses[i] == s) return i;
+    if (kAllStatuses[i] == Status::Internal) internal = i;
+  }
+  return internal;
 }
 
 // Seconds: a cycle is ~10-100 ms when all is well, up to the cycle deadline (<= 60 s) when not.
@@ -60,7 +61,7 @@ struct Metrics::Impl {
   void makeJob(prometheus::Family<prometheus::Counter>& cycles, prometheus::Family<prometheus::Histogram>& seconds,
                const std::string& job, JobSeries& out) {
     for (std::size_t i = 0; i < kStatusCount; ++i)
-      out.cycles[i] = &cycles.Add({{"job", job}, {"status", std::string(statusName(kStatuses[i]))}});
+      out.cycles[i] = &cycles.Add({{"job", job}, {"status", std::string(statusName(kAllStatuses[i]))}});
     out.seconds = &seconds.Add({{"job", job}}, kSecondsBuckets);
   }
 };
@@ -115,7 +116,7 @@ Metrics::Metrics(const std::string& cell, const std::vector<int>& jobIds, const 
   for (const auto& robot : robots) {
     auto& row = impl_->robotReplies[robot];
     for (std::size_t i = 0; i < kStatusCount; ++i)
-      row[i] = &replies.Add({{"robot", robot}, {"status", std::string(statusName(kStatuses[i]))}});
+      row[i] = &replies.Add({{"robot", robot}, {"status", std::string(statusName(kAllStatuses[i]))}});
   }
 }
 

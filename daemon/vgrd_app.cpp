@@ -24,6 +24,7 @@
 #include "daemon/image_archive.hpp"
 #include "daemon/journal.hpp"
 #include "daemon/metrics.hpp"
+#include "daemon/pause_probe.hpp"
 #include "daemon/plc_links.hpp"
 #include "daemon/result_store.hpp"
 #include "daemon/watchdog.hpp"
@@ -58,6 +59,8 @@ struct VgrdApp::Impl {
   std::uint64_t watchdogUsec = 0;  // systemd's WatchdogSec in µs; 0 = not asked for pings
   Watchdog watchdog;               // every long-lived thread's heartbeat (daemon/watchdog.hpp)
   bool stallReported = false;
+  PauseProbe pauseProbe;           // why vgrd did not run, when the watchdog tick comes late
+  bool watchdogTicked = false;     // watchdogTimer has an expiry to compare with
   // Hand-over lag: how long a published result waited for the I/O thread before robots
   // could get it (see handOver()). I/O thread only.
   static constexpr double kLateHandOverMs = 20;
@@ -150,7 +153,11 @@ struct VgrdApp::Impl {
   // logged once when it starts (naming the thread) and once when it ends; systemd, which
   // gets no pings meanwhile, kills vgrd WatchdogSec after the last one.
   void checkWatchdog() {
-    const auto stalls = watchdog.stalled(Watchdog::Clock::now());
+    const auto now = Watchdog::Clock::now();
+    if (const auto pause = pauseProbe.tick(watchdogTicked ? watchdogTimer.expiry() : now, now, watchdog.silences(now)))
+      log::warn("main", "{}", *pause);
+    watchdogTicked = true;
+    const auto stalls = watchdog.stalled(now);
     if (stalls.empty()) {
       if (stallReported) {
         log::info("main", "watchdog: every thread makes progress again; pings resumed");
@@ -190,6 +197,9 @@ struct VgrdApp::Impl {
     log::info("main", "journal: {} records ({:.1f} µs per write), {} syncs ({:.1f} µs each), {} rotations", j.records,
               j.records ? static_cast<double>(j.writeMicros) / static_cast<double>(j.records) : 0.0, j.syncs,
               j.syncs ? static_cast<double>(j.syncMicros) / static_cast<double>(j.syncs) : 0.0, j.rotations);
+    if (pauseProbe.pauses() > 0)
+      log::info("main", "pauses: {} times vgrd did not run for >= {} ms (worst {} ms; the 'pause:' lines say why)",
+                pauseProbe.pauses(), PauseProbe::kReportLate.count(), pauseProbe.worst().count());
     if (lateHandOvers > 0)
       log::info("main", "hand-over: {} results reached the robots' side >= {:.0f} ms after publish (worst {:.1f} ms), "
                 "{} of those lines held back", lateHandOvers, kLateHandOverMs, maxHandOverMs,

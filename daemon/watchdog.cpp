@@ -19,4 +19,12 @@ std::vector<Watchdog::Stall> Watchdog::stalled(Clock::time_point now) const {
   return out;
 }
 
+std::vector<std::pair<std::string, std::chrono::milliseconds>> Watchdog::silences(Clock::time_point now) const {
+  std::vector<std::pair<std::string, std::chrono::milliseconds>> out;
+  for (const auto& t : threads_)
+    if (const auto since = t.heartbeat->sinceLastBeat(now))
+      out.emplace_back(t.name, std::chrono::duration_cast<std::chrono::milliseconds>(*since));
+  return out;
+}
+
 }  // namespace vgr::daemon

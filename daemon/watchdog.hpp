@@ -12,6 +12,7 @@
 
 #include <chrono>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/heartbeat.hpp"
@@ -35,6 +36,10 @@ class Watchdog {
   // The threads whose last beat is older than their limit at `now`, worst first. A thread
   // that has never beaten is not stalled yet (it has not started).
   std::vector<Stall> stalled(Clock::time_point now) const;
+
+  // Every started thread's time since its last beat at `now`, in the order watched (for the
+  // pause report, daemon/pause_probe.hpp).
+  std::vector<std::pair<std::string, std::chrono::milliseconds>> silences(Clock::time_point now) const;
 
   std::size_t size() const { return threads_.size(); }
 

@@ -9,6 +9,9 @@
 #include <sys/ptrace.h>
 #include <sys/wait.h>
 
+#include <csignal>
+#include <thread>
+
 #include <cerrno>
 #include <chrono>
 #include <cstdlib>
@@ -98,6 +101,29 @@ TEST_F(WatchdogVgrd, AnIdleCellKeepsPinging) {
   // No trigger for 5 s: every thread idles in bounded waits and beats; pings every ~500 ms.
   EXPECT_GE(notify_->countFor("WATCHDOG=1", 5000ms), 7) << log("vgrd.log");
   EXPECT_EQ(log("vgrd.log").find("made no progress"), std::string::npos) << log("vgrd.log");
+  EXPECT_EQ(log("vgrd.log").find("pause:"), std::string::npos) << log("vgrd.log");
+}
+
+// A pause of the whole process (docs/robustness.md "Pauses"): SIGSTOP holds every thread of
+// vgrd for 1.5 s, SIGCONT lets them go. The I/O thread's next watchdog tick comes ~1.5 s late;
+// vgrd logs the pause with the threads' silences and the verdict its scheduler figures give:
+// not runnable (stopped), which is neither "no CPU" nor "busy".
+TEST_F(WatchdogVgrd, AStoppedProcessLogsThePauseAndWhy) {
+  ASSERT_GE(notify_->countFor("WATCHDOG=1", 2000ms), 1) << log("vgrd.log");
+  ASSERT_EQ(::kill(vgrd_->pid(), SIGSTOP), 0);
+  std::this_thread::sleep_for(1500ms);
+  ASSERT_EQ(::kill(vgrd_->pid(), SIGCONT), 0);
+  EXPECT_TRUE(notify_->waitFor("WATCHDOG=1", 2000ms)) << log("vgrd.log");
+  std::string text;
+  for (int i = 0; i < 20 && (text = log("vgrd.log")).find("pause:") == std::string::npos; ++i)
+    std::this_thread::sleep_for(100ms);
+  const auto at = text.find("pause: the I/O thread's watchdog timer fired ");
+  ASSERT_NE(at, std::string::npos) << text;
+  const int lateMs = std::stoi(text.substr(at + std::string("pause: the I/O thread's watchdog timer fired ").size()));
+  EXPECT_GE(lateMs, 1000) << text.substr(at, 600);  // stopped 1500 ms; the tick was due within 500 ms of the stop
+  const std::string line = text.substr(at, text.find('\n', at) - at);
+  EXPECT_NE(line.find("cycle "), std::string::npos) << line;
+  EXPECT_NE(line.find("not runnable"), std::string::npos) << line;
 }
 
 }  // namespace

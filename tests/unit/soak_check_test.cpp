@@ -123,5 +123,16 @@ TEST_F(SoakLog, ReadsVgrdsLateHandOverLines) {
   EXPECT_TRUE(readLateHandOvers(this->path("absent.log")).empty());
 }
 
+TEST_F(SoakLog, ReadsVgrdsPauseLines) {
+  const std::string path = this->path("vgrd.log");
+  std::ofstream(path) << "2026-12-05T04:37:26.130 warning [main] pause: the I/O thread's watchdog timer fired 2450 ms "
+                         "late (vgrd did not run for that long); ... so: not runnable: blocked\n"
+                         "2026-12-05T04:38:26.130 info  [main] pauses: 1 times vgrd did not run for >= 500 ms\n";
+  const auto pauses = readPauses(path);
+  ASSERT_EQ(pauses.size(), 1u);
+  EXPECT_EQ(pauses[0].rfind("pause: the I/O thread's watchdog timer fired 2450 ms late", 0), 0u) << pauses[0];
+  EXPECT_TRUE(readPauses(this->path("absent.log")).empty());
+}
+
 }  // namespace
 }  // namespace vgr::tools::soak

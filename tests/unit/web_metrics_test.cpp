@@ -7,7 +7,9 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
+#include <iterator>
 #include <string>
 #include <thread>
 
@@ -142,6 +144,7 @@ TEST(metrics, SeriesCountsAndSamples) {
   m.triggered(TriggerSource::Modbus, false);
   m.robotReplied("ur5", Status::NoPartFound);
   m.robotReplied("someone-else", Status::Ok);  // unknown endpoint: ignored
+  m.robotReplied("ur5", Status::NotPermitted);  // counted under its own name, not as INTERNAL
 
   const std::string text = m.render();
   EXPECT_NE(text.find("# TYPE vgr_cycles_total counter"), std::string::npos) << text;
@@ -156,9 +159,25 @@ TEST(metrics, SeriesCountsAndSamples) {
   EXPECT_NE(text.find("vgr_triggers_total{source=\"modbus\"} 1"), std::string::npos) << text;
   EXPECT_NE(text.find("vgr_trigger_overruns_total{source=\"modbus\"} 1"), std::string::npos) << text;
   EXPECT_NE(text.find("vgr_robot_replies_total{robot=\"ur5\",status=\"NO_PART_FOUND\"} 1"), std::string::npos);
+  EXPECT_NE(text.find("vgr_robot_replies_total{robot=\"ur5\",status=\"NOT_PERMITTED\"} 1"), std::string::npos) << text;
+  EXPECT_NE(text.find("vgr_robot_replies_total{robot=\"ur5\",status=\"INTERNAL\"} 0"), std::string::npos) << text;
   EXPECT_NE(text.find("# TYPE vgr_camera_frames_total counter"), std::string::npos) << text;
   EXPECT_NE(text.find("vgr_camera_frames_total{camera=\"cam0\"} 41"), std::string::npos) << text;
   EXPECT_NE(text.find("vgr_camera_streaming{camera=\"cam0\"} 1"), std::string::npos) << text;
+}
+
+// kAllStatuses is the one list of statuses: every value statusName names (anything else is
+// named INTERNAL) is in it exactly once, so the metrics' series cover every status.
+TEST(status, EveryNamedStatusIsInTheList) {
+  std::size_t named = 0;
+  for (int code = -64; code <= 64; ++code) {
+    const auto s = static_cast<Status>(code);
+    const bool isNamed = statusName(s) != "INTERNAL" || s == Status::Internal;
+    const auto inList = std::count(std::begin(kAllStatuses), std::end(kAllStatuses), s);
+    EXPECT_EQ(inList, isNamed ? 1 : 0) << "status code " << code << " (" << statusName(s) << ")";
+    named += isNamed;
+  }
+  EXPECT_EQ(named, std::size(kAllStatuses));
 }
 
 }  // namespace

@@ -429,6 +429,7 @@ int runSoak(const SoakOptions& o) {
   for (auto& r : robots) in.robots.push_back({r->options(), r->records()});
   in.kills = vgrd.kills();
   in.lateHandOverMs = soak::readLateHandOvers(work + "/vgrd.log");
+  in.pauses = soak::readPauses(work + "/vgrd.log");
   in.cycleDeadlineMs = cfg->cycleDeadlineMs;
   in.replyDeadlineMs = cfg->robots.front().replyDeadlineMs;
   in.slackMs = o.slackMs;

@@ -107,6 +107,14 @@ std::map<std::uint32_t, double> readLateHandOvers(const std::string& vgrdLogPath
   return out;
 }
 
+std::vector<std::string> readPauses(const std::string& vgrdLogPath) {
+  std::vector<std::string> out;
+  std::ifstream in(vgrdLogPath);
+  for (std::string l; std::getline(in, l);)
+    if (const auto at = l.find(" pause: "); at != std::string::npos) out.push_back(l.substr(at + 1));
+  return out;
+}
+
 CheckResult check(const CheckInput& in) {
   Problems problems;
   const auto killedWithin = [&](double from, double to) {
@@ -413,6 +421,7 @@ CheckResult check(const CheckInput& in) {
   s["p99_latency_ms"] = r3(percentile(latencies, 0.99));
   s["plc_mid_handshake_drops"] = plcDrops;
   s["late_hand_overs"] = in.lateHandOverMs.size();
+  s["pauses"] = in.pauses;
   s["journal"] = {{"lines", in.journal.size()},
                   {"duplicates", journalDuplicates},
                   {"missing", journalMissing},

@@ -51,6 +51,9 @@ struct CheckInput {
   // vgrd's own clock: cycles whose result reached the robots' side (its I/O thread) late,
   // in ms after publish, from vgrd's "robots got the result N ms after" log lines.
   std::map<std::uint32_t, double> lateHandOverMs;
+  // vgrd's "pause:" lines (daemon/pause_probe.hpp), reported in the summary as they are:
+  // the evidence of why vgrd did not run (docs/robustness.md "Pauses").
+  std::vector<std::string> pauses;
   int cycleDeadlineMs = 1500;
   int replyDeadlineMs = 1500;
   int slackMs = 250;                     // measurement slack (polling, scheduling) on every deadline
@@ -66,6 +69,9 @@ struct CheckResult {
 // The late hand-overs vgrd logged (daemon/vgrd_app.cpp, handOver()): cycle -> ms. Lines
 // vgrd's rate limit held back are simply absent (those cycles are then judged as usual).
 std::map<std::uint32_t, double> readLateHandOvers(const std::string& vgrdLogPath);
+
+// vgrd's "pause:" warnings, each from "pause:" to the end of its line.
+std::vector<std::string> readPauses(const std::string& vgrdLogPath);
 
 // Reads <path>, <path>.1 ... (rotated) line by line; lines that do not parse are counted.
 std::vector<JournalEntry> readJournals(const std::string& path, int& unparsable, int& files);
