@@ -29,30 +29,50 @@ double exactZAt(const cv::Mat& z, const Eigen::Vector2d& q) {
   return z.at<double>(static_cast<int>(std::lround(q.y())), static_cast<int>(std::lround(q.x())));
 }
 
+// Lines of centres across a face: segment a -> b moved along `step` (a unit model axis) by
+// every kGraspStepMm from lo to hi mm, each line its own canonical grasp `name@AXIS+N`.
+// A parallel gripper's jaws (kJawLengthMm long) fit anywhere on a face, not on one line:
+// the true centres must cover the face, or the rectangle metric, which accepts a match
+// with any true rectangle, calls as good a grasp beside the one line a miss.
+void faceLines(std::vector<CanonicalGrasp>& out, const std::string& name, const V3& a, const V3& b, const V3& step, char axis, int lo,
+               int hi, const V3& closing, double section) {
+  for (int o = lo; o <= hi; o += static_cast<int>(kGraspStepMm))
+    out.push_back(grasp(fmt::format("{}@{}{:+d}", name, axis, o), a + step * o, b + step * o, closing, section));
+}
+
 }  // namespace
 
-// The part geometry is sim/depth_parts.cpp's (mm, model frame). Sections:
-//   bracket  flange: across its 8 mm thickness (y -20..-12), 10 mm below its top edge;
+// The part geometry is sim/depth_parts.cpp's (mm, model frame). Sections, each a face of
+// centres (faceLines(): lines every 2 mm wherever the 10 mm jaws fit on the faces they
+// close on):
+//   bracket  flange: across its 8 mm thickness (y -20..-12), z 13..35 (above the base
+//            plate's top 8 + 5, below its top edge 40 - 5);
 //            base-width: across the whole part (y -20..20, 40 mm) at the base plate's
-//            mid-height; base-thickness: across the 8 mm base plate (z 0..8), 5 mm in
-//            from its free long edge (y = 20), for a bracket lying on its side
-//   housing  block-width: across the 36 mm block (y) at mid-height; block-height: across
-//            its 22 mm height (z), 9 mm in from either long side face (a housing lying on
-//            a side)
+//            mid-height (z 4: above it the section is the flange's);
+//            base-thickness: across the 8 mm base plate (z 0..8), y -7..15 (from the
+//            flange's face -12 + 5 to the free long edge 20 - 5), for a bracket on its side
+//   housing  block-width: across the 36 mm block (y), z 5..17 (its height 0..22, less 5);
+//            block-height: across its 22 mm height (z), y -12..12 (the 36 mm side faces,
+//            less 5), for a housing on its side or on an end
 //   lever    arm: across the 10 mm arm (y) at mid-height, between the hubs
 // Round features (bosses, hubs) are left out: a grasp on them has no defined angle.
+// Where a rib, boss, lug or hub stands in a jaw's way, sceneGraspTruth's rule (3) removes
+// those centres.
 Result<std::vector<CanonicalGrasp>> canonicalGrasps(const std::string& part) {
   if (auto p = depthPart(part); !p) return std::unexpected(p.error());
   const V3 y = V3::UnitY(), z = V3::UnitZ();
-  if (part == "bracket")
-    return std::vector<CanonicalGrasp>{grasp("flange", {-25, -16, 30}, {25, -16, 30}, y, 8),
-                                       grasp("base-width", {-25, 0, 4}, {25, 0, 4}, y, 40),
-                                       grasp("base-thickness", {-25, 15, 4}, {25, 15, 4}, z, 8)};
-  if (part == "housing")
-    return std::vector<CanonicalGrasp>{grasp("block-width", {-20, 0, 11}, {20, 0, 11}, y, 36),
-                                       grasp("block-height+y", {-20, 9, 11}, {20, 9, 11}, z, 22),
-                                       grasp("block-height-y", {-20, -9, 11}, {20, -9, 11}, z, 22)};
-  return std::vector<CanonicalGrasp>{grasp("arm", {14, 0, 4}, {48, 0, 4}, y, 10)};
+  std::vector<CanonicalGrasp> g;
+  if (part == "bracket") {
+    faceLines(g, "flange", {-25, -16, 0}, {25, -16, 0}, z, 'z', 13, 35, y, 8);
+    g.push_back(grasp("base-width", {-25, 0, 4}, {25, 0, 4}, y, 40));
+    faceLines(g, "base-thickness", {-25, 0, 4}, {25, 0, 4}, y, 'y', -7, 15, z, 8);
+  } else if (part == "housing") {
+    faceLines(g, "block-width", {-20, 0, 0}, {20, 0, 0}, z, 'z', 5, 17, y, 36);
+    faceLines(g, "block-height", {-20, 0, 11}, {20, 0, 11}, y, 'y', -12, 12, z, 22);
+  } else {
+    g.push_back(grasp("arm", {14, 0, 4}, {48, 0, 4}, y, 10));
+  }
+  return g;
 }
 
 Result<std::vector<GraspTruth>> sceneGraspTruth(const DepthScene& scene, const std::string& part) {

@@ -1,8 +1,12 @@
 // Grasp detection (vision/grasp/): the floor and height map, the network's input and
 // targets, the rectangle metric, both detectors, bad input, and grasps in the robot frame.
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <string>
+#include <utility>
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
@@ -329,7 +333,11 @@ TEST(grasp_ggcnn, TheCommittedModelIsSmallAndBeatsTheBaselineOnHeldOutScenes) {
       ASSERT_TRUE(truth);
       if (truth->empty()) continue;
       std::vector<TruthRect> rects;
-      for (const auto& t : *truth) rects.push_back({{t.u, t.v, t.angleDeg, t.widthPx, t.jawPx}, t.centreCam.z, scene->camera.fx, t.part * 10, t.sample});
+      std::map<std::pair<int, std::string>, int> lines;  // one polyline per line of one part
+      for (const auto& t : *truth) {
+        const int line = lines.emplace(std::make_pair(t.part, t.grasp), static_cast<int>(lines.size())).first->second;
+        rects.push_back({{t.u, t.v, t.angleDeg, t.widthPx, t.jawPx}, t.centreCam.z, scene->camera.fx, line, t.sample});
+      }
       ++graspable;
       const DepthFrame frame = frameOf(scene->depth, scene->camera);
       auto g = (*det)->detect(frame);
@@ -341,11 +349,14 @@ TEST(grasp_ggcnn, TheCommittedModelIsSmallAndBeatsTheBaselineOnHeldOutScenes) {
     }
   }
   ASSERT_GE(graspable, 18);
-  // The committed model's measured level on these scenes (docs/grasp.md "Status": issue 15's
-  // >= 90 % is NOT reached yet); a retrained model must not fall below it, nor below the
+  std::printf("ggcnn %d, analytic %d of %d graspable scenes\n", success, baseSuccess, graspable);
+  // The committed model's measured level on these scenes (docs/grasp.md "Measured": issue
+  // 15's >= 90 % is NOT reached yet); a retrained model must not fall below it, nor below the
   // analytic baseline.
-  // Measured 15 of 24 (analytic 8) with the committed model: a floor of 55 %.
-  EXPECT_GE(success, 0.55 * graspable) << success << " of " << graspable;
+  // Measured 17 of 24 (analytic 14) with the committed model against the face truth
+  // (sim/grasp_truth.hpp) at the default --min-quality 0.2; before: 15 of 24 (analytic 8)
+  // against the old line truth at 0.4.
+  EXPECT_GE(success, 17) << success << " of " << graspable;
   EXPECT_GT(success, baseSuccess) << "ggcnn " << success << ", analytic " << baseSuccess << " of " << graspable;
 }
 

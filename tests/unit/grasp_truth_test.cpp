@@ -38,20 +38,17 @@ TriMesh box(V3 lo, V3 hi) {
   return m;
 }
 
-// A lever lying flat on a floor 560 mm below a camera looking straight down (the bin frame
-// of sim/depth_scene.cpp: z up, camera = diag(1, -1, -1) at z 560), turned by `tiltDeg`
-// about its arm (model x) and lifted by `liftMm`; `obstacles` in the lever's model frame.
-DepthScene leverScene(double tiltDeg = 0, double liftMm = 0, const std::vector<TriMesh>& obstacles = {}) {
-  static const DepthPart lever = *depthPart("lever");
+// `part` on a floor 560 mm below a camera looking straight down (the bin frame of
+// sim/depth_scene.cpp: z up, camera = diag(1, -1, -1) at z 560), placed by binFromModel;
+// `obstacles` in the part's model frame.
+DepthScene partScene(const std::string& part, const Eigen::Isometry3d& binFromModel, const std::vector<TriMesh>& obstacles = {}) {
+  const DepthPart model = *depthPart(part);
   const TriMesh floor = box({-400, -300, -10}, {400, 300, 0});
   Eigen::Isometry3d camFromBin = Eigen::Isometry3d::Identity();
   camFromBin.linear() = V3(1, -1, -1).asDiagonal();
   camFromBin.translation() = V3(0, 0, 560);
-  Eigen::Isometry3d binFromModel = Eigen::Isometry3d::Identity();
-  binFromModel.linear() = Eigen::AngleAxisd(tiltDeg * M_PI / 180, V3::UnitX()).toRotationMatrix();
-  binFromModel.translation() = V3(0, 0, liftMm);
   DepthScene s;
-  std::vector<MeshInstance> meshes{{&floor, poseOf(camFromBin), 0}, {&lever.mesh, poseOf(camFromBin * binFromModel), 1}};
+  std::vector<MeshInstance> meshes{{&floor, poseOf(camFromBin), 0}, {&model.mesh, poseOf(camFromBin * binFromModel), 1}};
   for (const auto& o : obstacles) meshes.push_back({&o, poseOf(camFromBin * binFromModel), 0});
   ExactDepth e;
   rasterize(meshes, s.camera, e);
@@ -62,6 +59,14 @@ DepthScene leverScene(double tiltDeg = 0, double liftMm = 0, const std::vector<T
   t.pose = poseOf(camFromBin * binFromModel);
   s.parts.push_back(t);
   return s;
+}
+
+// A lever lying flat, turned by `tiltDeg` about its arm (model x) and lifted by `liftMm`.
+DepthScene leverScene(double tiltDeg = 0, double liftMm = 0, const std::vector<TriMesh>& obstacles = {}) {
+  Eigen::Isometry3d binFromModel = Eigen::Isometry3d::Identity();
+  binFromModel.linear() = Eigen::AngleAxisd(tiltDeg * M_PI / 180, V3::UnitX()).toRotationMatrix();
+  binFromModel.translation() = V3(0, 0, liftMm);
+  return partScene("lever", binFromModel, obstacles);
 }
 
 std::set<int> samples(const std::vector<GraspTruth>& truth) {
@@ -110,6 +115,38 @@ TEST(grasp_truth, JawsThatWouldTouchTheHubsOrTheLugLeaveNoTruth) {
     EXPECT_NEAR(g.widthPx, 14 * 800 / z, 1e-6);
     EXPECT_NEAR(g.jawPx, 10 * 800 / z, 1e-6);
     EXPECT_NEAR(g.centreCam.z, z, 1e-6);
+  }
+}
+
+// A housing standing on its end (model x up, the lug's end x = -38 on the floor): the top
+// face is the block's 36 x 22 mm end; across its 22 mm height (model z) the 10 mm jaws fit
+// anywhere along its 36 mm (model y in -13..13), so a grasp in the middle of that face is as
+// true as one 9 mm off it. The truth once held the lines y = +-9 only, and the metric (a
+// match with any true rectangle) called the middle, 9 mm from either along a 10 mm jaw,
+// a miss. Centre x = 20 (5 mm below the top: the boss at x 1..19 stands in the +z jaw's way
+// deeper down).
+TEST(grasp_truth, AHousingOnItsEndIsGraspedAcrossItsHeightAnywhereAlongTheFace) {
+  Eigen::Isometry3d binFromModel = Eigen::Isometry3d::Identity();
+  binFromModel.linear() = Eigen::AngleAxisd(-M_PI / 2, V3::UnitY()).toRotationMatrix();  // model x -> bin z
+  binFromModel.translation() = V3(0, 0, 38);
+  ASSERT_NEAR((binFromModel.linear() * V3::UnitX() - V3::UnitZ()).norm(), 0, 1e-12);
+  const DepthScene s = partScene("housing", binFromModel);
+  auto t = sceneGraspTruth(s, "housing");
+  ASSERT_TRUE(t) << t.error().message;
+  Eigen::Isometry3d camFromBin = Eigen::Isometry3d::Identity();
+  camFromBin.linear() = V3(1, -1, -1).asDiagonal();
+  camFromBin.translation() = V3(0, 0, 560);
+  for (double y : {-12.0, -8.0, -4.0, 0.0, 4.0, 8.0, 12.0}) {
+    const V3 c = camFromBin * binFromModel * V3(20, y, 11);
+    int found = 0;
+    for (const auto& g : *t) {
+      // (at y = 0 the grasp across the 36 mm width shares the centre)
+      if ((V3(g.centreCam.x, g.centreCam.y, g.centreCam.z) - c).norm() < 1e-6 && std::abs(g.widthMm - 26) < 1e-9) {
+        ++found;
+        EXPECT_NEAR(g.angleDeg, 0, 1e-6) << "model z (bin -x after the turn) runs along the image's rows";
+      }
+    }
+    EXPECT_EQ(found, 1) << "a true centre across the 22 mm height (26 mm opening) at model y = " << y << " mm";
   }
 }
 

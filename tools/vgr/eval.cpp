@@ -96,7 +96,7 @@ CLI::App* EvalCommand::add(CLI::App& parent) {
   auto* graspFlag = evalCmd->add_flag("--grasp", options_.grasp, "grasp detectors on a data set made with vgr sim render --3d --grasps (docs/grasp.md)");
   evalCmd->add_option("--detectors", options_.graspDetectors, "--grasp: comma-separated detectors (default ggcnn,analytic)")->needs(graspFlag);
   evalCmd->add_option("--model", g.detector.modelPath, "--grasp: the grasp network, an ONNX file (models/grasp/ggcnn.onnx)")->needs(graspFlag);
-  evalCmd->add_option("--min-quality", g.detector.minQuality, "--grasp: ggcnn peaks below Q are not grasps (default 0.4)")
+  evalCmd->add_option("--min-quality", g.detector.minQuality, "--grasp: ggcnn peaks below Q are not grasps (default 0.2)")
       ->check(CLI::Range(0.0, 1.0))
       ->needs(graspFlag);
   evalCmd->add_option("--min-iou", g.metric.minIou, "--grasp: rectangle metric IoU (default 0.25)")->check(CLI::Range(0.0, 1.0))->needs(graspFlag);

@@ -202,7 +202,7 @@ CLI::App* GraspDetectCommand::add(CLI::App& parent) {
   c->add_option("--limit", o.limit, "first N images only")->check(CLI::Range(0, 100000000));
   c->add_option("--detector", o.detector.detector, "ggcnn (default) or analytic");
   c->add_option("--model", o.detector.modelPath, "ggcnn: the ONNX file (models/grasp/ggcnn.onnx)");
-  c->add_option("--min-quality", o.detector.minQuality, "ggcnn: peaks below Q are not grasps (default 0.4)")->check(CLI::Range(0.0, 1.0));
+  c->add_option("--min-quality", o.detector.minQuality, "ggcnn: peaks below Q are not grasps (default 0.2)")->check(CLI::Range(0.0, 1.0));
   c->add_option("--max-grasps", o.detector.maxGrasps, "at most N grasps per image, best first (default 5)")->check(CLI::Range(1, 100));
   c->add_option("--gripper-opening", o.detector.gripper.maxOpeningMm, "widest gripper opening, MM (default 60)")->check(CLI::Range(1.0, 1000.0));
   c->add_option("--camera-pose", o.cameraPose, "3D calibration: handeye.yaml of the fixed depth camera (eye-to-hand, X = T_base_cam)");

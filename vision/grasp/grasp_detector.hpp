@@ -48,7 +48,7 @@ struct Grasp {
 struct GraspDetectorOptions {
   std::string detector = "ggcnn";  // a graspDetectorNames() name
   std::string modelPath;           // ggcnn: the ONNX file (required)
-  double minQuality = 0.4;         // [0, 1] ggcnn: peaks below this are not grasps ("not found")
+  double minQuality = 0.2;         // [0, 1] ggcnn: peaks below this are not grasps ("not found"); from the validation sweep (docs/grasp.md)
   int maxGrasps = 5;               // [1, 100] at most this many grasps, best first
   Gripper gripper;
   FloorOptions floor;
