@@ -789,6 +789,21 @@ class Locator3dImpl final : public Locator3d {
     return c;
   }
 
+  // The eigen-directions of ICP's J^T J `h` (rotations scaled to mm at the part's radius) and
+  // how stiffly ICP's surfaces hold each (eigenvalue / sigma^2, sigma 0.35 mm the sensor
+  // noise at the part's distance): the prior of both boundary alignments below.
+  void stiffDirections(const Eigen::Matrix<double, 6, 6>& h, std::vector<Eigen::Matrix<double, 6, 1>>& dirs,
+                       std::vector<double>& stiff) const {
+    Eigen::Matrix<double, 6, 6> s = Eigen::Matrix<double, 6, 6>::Identity();
+    s.topLeftCorner<3, 3>() /= radius_;
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eig(s * h * s);
+    constexpr double sigma = 0.35;
+    for (int i = 0; i < 6; ++i) {
+      dirs.push_back(eig.eigenvectors().col(i));
+      stiff.push_back(std::max(0.0, eig.eigenvalues()[i]) / (sigma * sigma));
+    }
+  }
+
   // The boundary alignment along the eigen-directions of ICP's J^T J (rotations scaled to mm
   // at the part's radius), each held by what ICP's surfaces say against moving along it
   // (eigenvalue / sigma^2, sigma the sensor noise at the part's distance, times the weight):
@@ -796,16 +811,9 @@ class Locator3dImpl final : public Locator3d {
   // and follow the boundaries, the rest stays where ICP put it.
   void alignToBoundaries(Eigen::Matrix4d& camFromModel, const Eigen::Matrix<double, 6, 6>& h, const cv::Mat& depth,
                          const DepthIntrinsics& k) {
-    Eigen::Matrix<double, 6, 6> s = Eigen::Matrix<double, 6, 6>::Identity();
-    s.topLeftCorner<3, 3>() /= radius_;
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eig(s * h * s);
-    const double sigma = 0.35;
     std::vector<Eigen::Matrix<double, 6, 1>> dirs;
     std::vector<double> stiff;
-    for (int i = 0; i < 6; ++i) {
-      dirs.push_back(eig.eigenvectors().col(i));
-      stiff.push_back(std::max(0.0, eig.eigenvalues()[i]) / (sigma * sigma));
-    }
+    stiffDirections(h, dirs, stiff);
     camFromModel = visibility_.alignToBoundaries(camFromModel, centroid_, radius_, dirs, stiff, depth, k, params_.fitnessDistanceMm,
                                                  params_.visibleMaxAngleDeg, claimed_);
   }
@@ -816,16 +824,9 @@ class Locator3dImpl final : public Locator3d {
   // error max 0.82 vs 0.56 deg). Measured on scenes 100-149 (docs/3d.md "Orientation"):
   // rotation error max bracket 1.47 -> 0.56 deg, lever 1.31 -> 0.48 deg.
   void alignToEdges(Eigen::Matrix4d& camFromModel, const Eigen::Matrix<double, 6, 6>& h, const cv::Mat& depth, const DepthIntrinsics& k) {
-    Eigen::Matrix<double, 6, 6> s = Eigen::Matrix<double, 6, 6>::Identity();
-    s.topLeftCorner<3, 3>() /= radius_;
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eig(s * h * s);
-    const double sigma = 0.35;
     std::vector<Eigen::Matrix<double, 6, 1>> dirs;
     std::vector<double> stiff;
-    for (int i = 0; i < 6; ++i) {
-      dirs.push_back(eig.eigenvectors().col(i));
-      stiff.push_back(std::max(0.0, eig.eigenvalues()[i]) / (sigma * sigma));
-    }
+    stiffDirections(h, dirs, stiff);
     camFromModel = visibility_.alignToEdges(camFromModel, centroid_, radius_, dirs, stiff, depth, k, params_.visibleMaxAngleDeg,
                                             kEdgeSigmaPx, claimed_);
   }
