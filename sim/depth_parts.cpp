@@ -221,6 +221,12 @@ std::vector<std::size_t> ownerOfTriangles(const DepthPart& part) {
 
 }  // namespace
 
+TriMesh boxMesh(const std::array<double, 3>& lo, const std::array<double, 3>& hi) {
+  TriMesh m;
+  appendMesh(box(vec(lo), vec(hi)), m);
+  return m;
+}
+
 const std::vector<std::string>& depthPartNames() {
   static const std::vector<std::string> names{"bracket", "housing", "lever"};
   return names;

@@ -58,6 +58,10 @@ struct DepthPart {
   std::array<double, 3> centroid{};   // volume centroid (mm, model frame)
 };
 
+// The closed mesh of the axis-aligned box [lo, hi] (mm), counter-clockwise seen from outside:
+// the bins, tables and clutter of the scenes, and test scenes, are built of these.
+TriMesh boxMesh(const std::array<double, 3>& lo, const std::array<double, 3>& hi);
+
 const std::vector<std::string>& depthPartNames();  // {"bracket", "housing", "lever"}
 // Errors: Status::BadArgument "unknown part 'x' (expected bracket, housing or lever)".
 Result<DepthPart> depthPart(const std::string& name);

@@ -23,17 +23,6 @@ Pose toPose(const Iso& t) {
   return Pose{t.translation().x(), t.translation().y(), t.translation().z(), q.w(), q.x(), q.y(), q.z()};
 }
 
-TriMesh boxMesh(const V3& lo, const V3& hi) {
-  TriMesh m;  // the winding of sim/depth_parts.cpp: counter-clockwise seen from outside
-  for (int i = 0; i < 8; ++i) m.vertices.push_back({(i & 1) ? hi.x() : lo.x(), (i & 2) ? hi.y() : lo.y(), (i & 4) ? hi.z() : lo.z()});
-  const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-  for (const auto& q : quads) {
-    m.triangles.push_back({q[0], q[1], q[2]});
-    m.triangles.push_back({q[0], q[2], q[3]});
-  }
-  return m;
-}
-
 TriMesh cylinderMesh(double r, double h, int n = 48) {
   TriMesh m;
   for (int k = 0; k < n; ++k) {

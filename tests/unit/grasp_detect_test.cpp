@@ -40,16 +40,7 @@ vgr::Pose poseOf(const Eigen::Isometry3d& t) {
   return {t.translation().x(), t.translation().y(), t.translation().z(), q.w(), q.x(), q.y(), q.z()};
 }
 
-sim::TriMesh box(V3 lo, V3 hi) {
-  sim::TriMesh m;
-  for (int i = 0; i < 8; ++i) m.vertices.push_back({(i & 1) ? hi.x() : lo.x(), (i & 2) ? hi.y() : lo.y(), (i & 4) ? hi.z() : lo.z()});
-  const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-  for (const auto& q : quads) {
-    m.triangles.push_back({q[0], q[1], q[2]});
-    m.triangles.push_back({q[0], q[2], q[3]});
-  }
-  return m;
-}
+sim::TriMesh box(V3 lo, V3 hi) { return sim::boxMesh(std::array<double, 3>{lo.x(), lo.y(), lo.z()}, std::array<double, 3>{hi.x(), hi.y(), hi.z()}); }
 
 // The camera of sim/depth_scene.cpp straight down on the bin frame (z up, floor z = 0).
 Eigen::Isometry3d camFromBin() {

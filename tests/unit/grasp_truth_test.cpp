@@ -27,16 +27,7 @@ vgr::Pose poseOf(const Eigen::Isometry3d& t) {
   return {t.translation().x(), t.translation().y(), t.translation().z(), q.w(), q.x(), q.y(), q.z()};
 }
 
-TriMesh box(V3 lo, V3 hi) {
-  TriMesh m;
-  for (int i = 0; i < 8; ++i) m.vertices.push_back({(i & 1) ? hi.x() : lo.x(), (i & 2) ? hi.y() : lo.y(), (i & 4) ? hi.z() : lo.z()});
-  const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-  for (const auto& q : quads) {
-    m.triangles.push_back({q[0], q[1], q[2]});
-    m.triangles.push_back({q[0], q[2], q[3]});
-  }
-  return m;
-}
+TriMesh box(V3 lo, V3 hi) { return boxMesh(std::array<double, 3>{lo.x(), lo.y(), lo.z()}, std::array<double, 3>{hi.x(), hi.y(), hi.z()}); }
 
 // `part` on a floor 560 mm below a camera looking straight down (the bin frame of
 // sim/depth_scene.cpp: z up, camera = diag(1, -1, -1) at z 560), placed by binFromModel;
