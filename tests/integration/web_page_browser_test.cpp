@@ -11,7 +11,10 @@
 // each 3D cycle's picture is its depth frame in false colour (docs/3d.md "The page's depth
 // picture"), with the disc at the journal's grasp point, the stated z range and the colour
 // bar (page_check.mjs --depth 1).
+#include <cstdio>
 #include <cstdlib>
+#include <functional>
+#include <string>
 #include <filesystem>
 #include <fstream>
 
@@ -26,14 +29,38 @@ namespace {
 using namespace std::chrono_literals;
 using vgr::test::ModbusCell;
 
-class web_page_browser : public ModbusCell {};
-
-TEST_F(web_page_browser, NewCycleOverlayWithinASecondTableEqualsJournalOutsiderRefused) {
-  const std::string node = std::filesystem::exists("/usr/bin/node") ? "/usr/bin/node" : "node";
-  const std::string script = vgr::test::sourcePath("tests/browser/page_check.mjs");
+// Node and tests/browser/page_check.mjs, after checking that playwright-core and Debian's
+// chromium are installed.
+void browserScript(std::string& node, std::string& script) {
+  node = std::filesystem::exists("/usr/bin/node") ? "/usr/bin/node" : "node";
+  script = vgr::test::sourcePath("tests/browser/page_check.mjs");
   ASSERT_TRUE(std::filesystem::exists(vgr::test::sourcePath("tests/browser/node_modules/playwright-core/package.json")))
       << "playwright-core is not installed: scripts/install-deps.sh runs 'npm ci' in tests/browser";
   ASSERT_TRUE(std::filesystem::exists("/usr/bin/chromium")) << "Debian's chromium: scripts/install-deps.sh installs it";
+}
+
+// The script's JSON report (its last '{' line) once it has exited, with what every run must
+// hold: a report, no failures, exit 0, a latency for each of the `checked` cycles.
+// `browserLog` reads the script's log (for the failure messages).
+void finishedReport(vgr::test::ChildProcess& p, int checked, const std::function<std::string()>& browserLog,
+                    nlohmann::json& j) {
+  std::string report;
+  for (auto line = p.readLine(60s); line; line = p.readLine(60s))
+    if (!line->empty() && line->front() == '{') report = *line;
+  const int rc = p.wait(10s);
+  j = nlohmann::json::parse(report, nullptr, false);
+  ASSERT_TRUE(j.is_object()) << "no report from the browser script\n" << browserLog();
+  std::printf("browser: %s\n", report.c_str());
+  EXPECT_TRUE(j["failures"].empty()) << j["failures"].dump(2) << "\n" << browserLog();
+  EXPECT_EQ(rc, 0) << browserLog();
+  ASSERT_GE(j["latencies_after_result_ms"].size(), static_cast<std::size_t>(checked));
+}
+
+class web_page_browser : public ModbusCell {};
+
+TEST_F(web_page_browser, NewCycleOverlayWithinASecondTableEqualsJournalOutsiderRefused) {
+  std::string node, script;
+  ASSERT_NO_FATAL_FAILURE(browserScript(node, script));
 
   const int port = vgr::test::freeLoopbackPort();
   ASSERT_GT(port, 0);
@@ -68,16 +95,8 @@ TEST_F(web_page_browser, NewCycleOverlayWithinASecondTableEqualsJournalOutsiderR
   modbus_close(ctx);
   modbus_free(ctx);
 
-  std::string report;
-  for (auto line = p->readLine(60s); line; line = p->readLine(60s))
-    if (!line->empty() && line->front() == '{') report = *line;
-  const int rc = p->wait(10s);
-  const auto j = nlohmann::json::parse(report, nullptr, false);
-  ASSERT_TRUE(j.is_object()) << "no report from the browser script\n" << log("browser.log");
-  std::printf("browser: %s\n", report.c_str());
-  EXPECT_TRUE(j["failures"].empty()) << j["failures"].dump(2) << "\n" << log("browser.log");
-  EXPECT_EQ(rc, 0) << log("browser.log");
-  ASSERT_GE(j["latencies_after_result_ms"].size(), static_cast<std::size_t>(kChecked));
+  nlohmann::json j;
+  ASSERT_NO_FATAL_FAILURE(finishedReport(*p, kChecked, [this] { return log("browser.log"); }, j));
   for (const auto& l : j["latencies_after_result_ms"]) EXPECT_LT(l.get<double>(), 1000.0) << "cycle's result -> overlay on the canvas";
   EXPECT_GE(j["rows_checked"].get<int>(), kChecked);
   EXPECT_EQ(j["refused_status"], 403);
@@ -92,11 +111,8 @@ TEST_F(web_page_browser, NewCycleOverlayWithinASecondTableEqualsJournalOutsiderR
 class web_page_browser_3d : public vgr::test::DepthCell {};
 
 TEST_F(web_page_browser_3d, EachDepthPictureOnTheCanvasWithinASecondTableEqualsJournal) {
-  const std::string node = std::filesystem::exists("/usr/bin/node") ? "/usr/bin/node" : "node";
-  const std::string script = vgr::test::sourcePath("tests/browser/page_check.mjs");
-  ASSERT_TRUE(std::filesystem::exists(vgr::test::sourcePath("tests/browser/node_modules/playwright-core/package.json")))
-      << "playwright-core is not installed: scripts/install-deps.sh runs 'npm ci' in tests/browser";
-  ASSERT_TRUE(std::filesystem::exists("/usr/bin/chromium")) << "Debian's chromium: scripts/install-deps.sh installs it";
+  std::string node, script;
+  ASSERT_NO_FATAL_FAILURE(browserScript(node, script));
 
   // Scene 0 of seed 1 (the demo's first): one the localizer finds (docs/demo.md "3D").
   ASSERT_NO_FATAL_FAILURE(prepare3dCell(1, vgr::tools::Demo3dScenes{}, 1));
@@ -126,16 +142,8 @@ TEST_F(web_page_browser_3d, EachDepthPictureOnTheCanvasWithinASecondTableEqualsJ
     std::this_thread::sleep_for(700ms);
   }
 
-  std::string report;
-  for (auto line = p->readLine(60s); line; line = p->readLine(60s))
-    if (!line->empty() && line->front() == '{') report = *line;
-  const int rc = p->wait(10s);
-  const auto j = nlohmann::json::parse(report, nullptr, false);
-  ASSERT_TRUE(j.is_object()) << "no report from the browser script\n" << log("browser.log");
-  std::printf("browser: %s\n", report.c_str());
-  EXPECT_TRUE(j["failures"].empty()) << j["failures"].dump(2) << "\n" << log("browser.log");
-  EXPECT_EQ(rc, 0) << log("browser.log");
-  ASSERT_GE(j["latencies_after_result_ms"].size(), static_cast<std::size_t>(kChecked));
+  nlohmann::json j;
+  ASSERT_NO_FATAL_FAILURE(finishedReport(*p, kChecked, [this] { return log("browser.log"); }, j));
   for (const auto& l : j["latencies_after_result_ms"]) EXPECT_LT(l.get<double>(), 1000.0) << "cycle's result -> picture on the canvas";
   EXPECT_TRUE(j.contains("depth_mm")) << "the script checked no depth picture";
   EXPECT_GE(j["rows_checked"].get<int>(), kChecked);
