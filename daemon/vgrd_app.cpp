@@ -81,7 +81,7 @@ struct VgrdApp::Impl {
       const protocol::ModbusResult m = protocol::modbusResultFrom(r);
       for (auto& plc : plcs) plc->publishResult(m);
     }
-    if (archive) r.archived = archive->offer(r, shown.image);  // gray frames only (not a 3D cycle's depth)
+    if (archive && !shown.depth) r.archived = archive->offer(r, shown.image);  // gray frames only (start() says so)
     plant->frameDone(r, shown);
     asio::post(io, [this, r, posted = std::chrono::steady_clock::now()] { handOver(r, posted); });
     journal.append(r);
@@ -331,6 +331,10 @@ Result<void> VgrdApp::start() {
   }
 
   if (s.cfg.archive.enabled) {
+    if (s.cfg.camera.depth())
+      log::warn("main", "archive: this cell's camera is a depth camera ({}); its frames are not archived (the archive "
+                "keeps 8-bit gray frames; docs/3d.md 'Not done yet'), only the journal records its cycles",
+                s.cfg.camera.pixelFormat);
     s.archive = std::make_unique<ImageArchive>(s.cfg.archive, archiveDir(s.cfg));
     if (auto r = s.archive->start(); !r) return r;
   }

@@ -141,6 +141,9 @@ TEST_F(depth_vgrd, a_scene_without_a_part_is_not_found_on_every_wire) {
   vgr::tools::Demo3dScenes scenes;
   scenes.emptyRatio = 1;
   ASSERT_NO_FATAL_FAILURE(prepare3dCell(2, scenes));
+  // An archive section (it keeps every failed cycle's frame on a 2D cell): a depth camera's
+  // frames are not archived, and vgrd says so at start instead of archiving nothing silently.
+  std::ofstream(configPath_, std::ios::app) << "\narchive:\n  quota_mb: 4\n";
   ASSERT_NO_FATAL_FAILURE(start3dCell("Millimeter", true));
   auto plc = vgr::test::runCommand(bin("vgr-sim-plc") + " --host 127.0.0.1 --port 1502 --cycles 2 --job 1 --timeout-ms 40000 --json",
                                    std::chrono::milliseconds(120000));
@@ -157,8 +160,10 @@ TEST_F(depth_vgrd, a_scene_without_a_part_is_not_found_on_every_wire) {
     ASSERT_FALSE(j.is_null()) << line;
     EXPECT_EQ(j["status"].get<int>(), 1) << line;
     EXPECT_TRUE(j["parts"].empty()) << j.dump();
+    EXPECT_FALSE(j.contains("archive")) << j.dump();
   }
   EXPECT_EQ(seen, 2) << plc.out;
+  EXPECT_NE(log("vgrd.log").find("its frames are not archived"), std::string::npos) << log("vgrd.log");
   // The robot gets the last result's status and no pose; the connection stays.
   vgr::test::RawTcpClient ur(kUrPort);
   ASSERT_TRUE(ur.send("GET,1\n"));
