@@ -243,6 +243,29 @@ TEST(Locator3d, BenchScenesWithinOneDegreeAndSecondRoundRecall) {
   }
 }
 
+// Recall, fourth pass (docs/3d.md "Recall (issue 13, fourth pass)"): the bench scenes the
+// third pass missed, each now the true pose within 2 mm / 2 deg and nothing else. All failed
+// before (not found): lever 142 / 147 touch the bin wall and formed one cluster with all the
+// walls (fixed by leaving the walls out of the clusters); bracket 120 and housing 319 had a
+// single near-truth PPF peak on a cluster of 135 / 154 points (fixed by every point of a
+// small cluster as a reference); bracket 326 and housing 336 had their near-truth hypothesis
+// at vote rank 13-22 (fixed by re-ranking the 24 most voted, not 12, by the depth image).
+TEST(Locator3d, BenchScenesMissedByTheThirdPassAreFound) {
+  const std::pair<const char*, int> cases[] = {{"lever", 142},   {"lever", 147},   {"bracket", 120},
+                                               {"housing", 319}, {"bracket", 326}, {"housing", 336}};
+  for (const auto& [part, scene] : cases) {
+    auto loc = vision::cloud::makeLocator3d(modelOf(part), Pose{}, Search3dParams{});
+    ASSERT_TRUE(loc.has_value()) << loc.error().message;
+    sim::DepthSceneOptions o;
+    o.part = part;
+    const Tally t = run(**loc, o, scene, 1);
+    EXPECT_EQ(t.wrong, 0) << part << " " << scene;
+    EXPECT_EQ(t.correct, 1) << part << " " << scene << ": retry " << t.retry << ", not found " << t.notFound;
+    EXPECT_LE(t.worstMm, 2) << part << " " << scene;
+    EXPECT_LE(t.worstDeg, 2) << part << " " << scene;
+  }
+}
+
 TEST(Locator3d, NoPoseOnEmptyScenes) {
   auto loc = vision::cloud::makeLocator3d(modelOf("housing"), Pose{}, testParams());
   ASSERT_TRUE(loc.has_value());

@@ -27,6 +27,7 @@
 #include <cstdlib>
 #include <optional>
 #include <ctime>
+#include <random>
 #include <string_view>
 #include <utility>
 
@@ -51,6 +52,13 @@ constexpr double kModelFineMm = 1.5;     // visibility model spacing
 constexpr int kClusterMinPoints = 3;
 constexpr int kClusterMinSize = 20;
 constexpr double kClusterZScale = 0.25;
+// Bin walls (sceneWalls): planes through the floor's normal holding more points of the voxel
+// grid than the whole model has, at most this many, found by RANSAC on two points with this
+// many samples and counted on a subsample of at most this many points; inliers within one voxel.
+constexpr int kMaxWalls = 4;
+constexpr int kWallIterations = 200;
+constexpr std::size_t kWallSample = 2000;
+constexpr double kWallMinPairMm = 20;
 constexpr double kSceneNormalRadiusMm = 2.5;
 // Coarse-to-fine refinement (cluster search): ICP pairs needed on the voxel grid, and the
 // fitness after the coarse stages below which the fine stage is not run.
@@ -82,8 +90,12 @@ constexpr double kPpfMaxNormalAngleDeg = 150;
 constexpr int kPpfRefStep = 2;
 constexpr double kPpfMaxBucketShare = 3.0;
 constexpr std::size_t kPpfRanked = 12;
-// Ranks beyond hypothesesPerCopy tried when the first round accepts nothing (searchClusters).
-constexpr std::size_t kSecondRoundRank = 8;
+// The second round (searchClusters, when the first accepts nothing): the most voted of all
+// references' merged peaks re-ranked by the depth image, and how many per cluster (not tried
+// in the first round) go through both stages (the third pass took ranks 3-7 of the first
+// round's 12: 5).
+constexpr std::size_t kPpfRankedSecond = 24;
+constexpr std::size_t kSecondRoundCount = 5;
 // FPFH neighbours: Open3D's tutorial caps them at 100, which at a 3 mm voxel cuts a 30 mm
 // radius to ~17 mm; 500 keeps the radius (measured: right matches 9 % -> 18 %).
 constexpr int kFpfhMaxNeighbours = 500;
@@ -242,7 +254,7 @@ class Locator3dImpl final : public Locator3d {
     std::vector<std::vector<std::size_t>> clusters;
     if (ppf_) {
       stage("voxel");
-      clusters = sceneClusters(sceneDown);
+      clusters = sceneClusters(sceneDown, sceneWalls(sceneDown));
       stage("clusters");
       // PPF needs normals true to each face: from the sensor's full-resolution points, for
       // the searched clusters' points only (a k-d tree over all of them cost ~80 ms); the
@@ -378,18 +390,25 @@ class Locator3dImpl final : public Locator3d {
   // bin floor is gone, each part and each clutter object is its own cluster. Returns the
   // clusters whose extent could be (part of) one part (bounding-box diagonal at most the
   // model's diameter + 2 clusterMm), each a list of sceneDown indices; biggest first.
-  std::vector<std::vector<std::size_t>> sceneClusters(const PointSet& sceneDown) const {
+  // wall: sceneDown points left out (sceneWalls), may be empty.
+  std::vector<std::vector<std::size_t>> sceneClusters(const PointSet& sceneDown, const std::vector<char>& wall) const {
     // z compressed: a part's faces at different heights are often separated by the invalid
     // pixels of its steep walls (measured: the bracket's flange and base plate 24 mm apart
     // in z fell into separate clusters at 8 and 15 mm); objects side by side are not.
     Points squashed;
-    for (const auto& p : sceneDown.points()) squashed.emplace_back(p.x(), p.y(), kClusterZScale * p.z());
+    std::vector<std::size_t> owner;
+    for (std::size_t i = 0; i < sceneDown.size(); ++i) {
+      if (!wall.empty() && wall[i]) continue;
+      const auto& p = sceneDown.points()[i];
+      squashed.emplace_back(p.x(), p.y(), kClusterZScale * p.z());
+      owner.push_back(i);
+    }
     const auto labels = PointSet(std::move(squashed)).clusters(params_.clusterMm, kClusterMinPoints);
     int n = 0;
     for (int l : labels) n = std::max(n, l + 1);
     std::vector<std::vector<std::size_t>> all(static_cast<std::size_t>(n));
     for (std::size_t i = 0; i < labels.size(); ++i)
-      if (labels[i] >= 0) all[static_cast<std::size_t>(labels[i])].push_back(i);
+      if (labels[i] >= 0) all[static_cast<std::size_t>(labels[i])].push_back(owner[i]);
     std::vector<std::vector<std::size_t>> out;
     const auto* truth = traceTruth();
     std::unique_ptr<backend::NearestIndex> truthIndex;
@@ -425,6 +444,56 @@ class Locator3dImpl final : public Locator3d {
     return out;
   }
 
+  // The bin's walls: up to kMaxWalls planes through the removed floor's normal (a vertical
+  // plane is fixed by two points), each holding more voxel-grid points than the whole model
+  // has (no part's face can), found by RANSAC one after the other; their points within a
+  // voxel are left out of the clusters (a part touching a wall formed one cluster with all
+  // the walls, larger than a part and never searched: lever bench scenes 142 / 147). The
+  // points stay in the scene for ICP and the visibility check. Empty when no floor was removed.
+  std::vector<char> sceneWalls(const PointSet& sceneDown) const {
+    std::vector<char> wall;
+    if (!plane_ || sceneDown.size() < modelDown_.size()) return wall;
+    wall.assign(sceneDown.size(), 0);
+    const Eigen::Vector3d up = plane_->head<3>().normalized();
+    const auto& pts = sceneDown.points();
+    const double tol = params_.voxelMm;
+    std::mt19937 rng(params_.seed);
+    for (int w = 0; w < kMaxWalls; ++w) {
+      std::vector<std::size_t> left;
+      for (std::size_t i = 0; i < pts.size(); ++i)
+        if (!wall[i]) left.push_back(i);
+      if (left.size() < modelDown_.size()) break;
+      std::vector<std::size_t> sample = left;
+      if (sample.size() > kWallSample) {
+        std::shuffle(sample.begin(), sample.end(), rng);
+        sample.resize(kWallSample);
+      }
+      std::uniform_int_distribution<std::size_t> pick(0, sample.size() - 1);
+      Eigen::Vector3d bestN = Eigen::Vector3d::Zero();
+      double bestD = 0;
+      std::size_t bestCount = 0;
+      for (int it = 0; it < kWallIterations; ++it) {
+        const Eigen::Vector3d& a = pts[sample[pick(rng)]];
+        const Eigen::Vector3d& b = pts[sample[pick(rng)]];
+        Eigen::Vector3d n = (b - a).cross(up);
+        if (n.norm() < kWallMinPairMm) continue;
+        n.normalize();
+        const double d = -n.dot(a);
+        std::size_t count = 0;
+        for (std::size_t i : sample) count += std::abs(n.dot(pts[i]) + d) <= tol;
+        if (count > bestCount) bestCount = count, bestN = n, bestD = d;
+      }
+      if (bestCount == 0) break;
+      std::vector<std::size_t> in;
+      for (std::size_t i : left)
+        if (std::abs(bestN.dot(pts[i]) + bestD) <= tol) in.push_back(i);
+      if (std::getenv("VGR_CLOUD_TRACE")) std::fprintf(stderr, "  wall plane %d: %zu points (needs > %zu)\n", w, in.size(), modelDown_.size());
+      if (in.size() <= modelDown_.size()) break;
+      for (std::size_t i : in) wall[i] = 1;
+    }
+    return wall;
+  }
+
   // Registers the model against each cluster on its own (paper 004 Sec. 3.2, with step 2's
   // FPFH + RANSAC replaced by PPF voting, ppf.hpp; docs/3d.md "Recall and speed"): the
   // cluster's reference-point peaks, merged and ranked, the best hypothesesPerCopy through
@@ -440,27 +509,9 @@ class Locator3dImpl final : public Locator3d {
       Eigen::Matrix4d t;
       double votes, score;
     };
-    std::vector<std::vector<Hyp>> ranked(clusters.size());  // per cluster, best first
-    for (std::size_t ci = 0; ci < clusters.size(); ++ci) {
-      std::vector<std::size_t> idx;
-      for (std::size_t i : clusters[ci])
-        if (active[i]) idx.push_back(i);
-      if (static_cast<int>(idx.size()) < kClusterMinSize) continue;
-      const PointSet cl = sceneDown.select(idx);
-      // Hypotheses: each reference point's PPF peak (ppf.hpp), merged when within 10 mm /
-      // 10 deg (their votes added), the kPpfRanked most voted re-ranked by how well the depth
-      // image supports them (quickScore), the best hypothesesPerCopy refined.
-      std::vector<Hyp>& hyps = ranked[ci];
-      const auto votes = ppf_->match(cl.points(), cl.normals(), kPpfRefStep);
-      if (const auto* truth = traceTruth()) {
-        int near = 0, maxVotes = 0, maxNear = 0;
-        for (const auto& vote : votes) {
-          maxVotes = std::max(maxVotes, vote.votes);
-          if (translationErrorMm(vote.sceneFromModel, *truth) < 15 && rotationErrorDeg(vote.sceneFromModel, *truth) < 15)
-            ++near, maxNear = std::max(maxNear, vote.votes);
-        }
-        std::fprintf(stderr, " cluster %zu: %zu reference peaks, %d near the truth (most votes %d, near the truth %d)\n", ci, votes.size(), near, maxVotes, maxNear);
-      }
+    // Each reference point's PPF peak merged into `hyps` when within 10 mm / 10 deg of one
+    // there (its votes added), else appended; then sorted by votes.
+    const auto mergePeaks = [](const std::vector<PpfModel::Vote>& votes, std::vector<Hyp>& hyps) {
       for (const auto& vote : votes) {
         bool merged = false;
         for (auto& h : hyps)
@@ -471,16 +522,51 @@ class Locator3dImpl final : public Locator3d {
           }
         if (!merged) hyps.push_back({vote.sceneFromModel, static_cast<double>(vote.votes), 0});
       }
-      std::sort(hyps.begin(), hyps.end(), [](const Hyp& a, const Hyp& b) { return a.votes > b.votes; });
-      if (hyps.size() > kPpfRanked) hyps.resize(kPpfRanked);
-      for (auto& h : hyps) h.score = quickScore(0, h.t, depth, k);
-      std::stable_sort(hyps.begin(), hyps.end(), [](const Hyp& a, const Hyp& b) { return a.score > b.score; });
+      std::stable_sort(hyps.begin(), hyps.end(), [](const Hyp& a, const Hyp& b) { return a.votes > b.votes; });
+    };
+    // The `n` most voted re-ranked by how well the depth image supports them (quickScore).
+    const auto rankTop = [&](const std::vector<Hyp>& hyps, std::size_t n) {
+      std::vector<Hyp> top(hyps.begin(), hyps.begin() + static_cast<std::ptrdiff_t>(std::min(n, hyps.size())));
+      for (auto& h : top) h.score = quickScore(0, h.t, depth, k);
+      std::stable_sort(top.begin(), top.end(), [](const Hyp& a, const Hyp& b) { return a.score > b.score; });
+      return top;
+    };
+    const auto traceRank = [](const char* what, std::size_t ci, const std::vector<Hyp>& hyps) {
+      const auto* truth = traceTruth();
+      if (!truth) return;
+      int rank = -1;
+      for (std::size_t i = 0; i < hyps.size() && rank < 0; ++i)
+        if (translationErrorMm(hyps[i].t, *truth) < 15 && rotationErrorDeg(hyps[i].t, *truth) < 15) rank = static_cast<int>(i);
+      std::fprintf(stderr, " cluster %zu: %zu %s, first near the truth at rank %d\n", ci, hyps.size(), what, rank);
+    };
+    std::vector<std::vector<Hyp>> merged(clusters.size());  // per cluster, every peak merged, most voted first
+    std::vector<std::vector<Hyp>> ranked(clusters.size());  // per cluster, the first round's, best first
+    std::vector<PointSet> searched(clusters.size());        // per cluster, its active points with normals
+    for (std::size_t ci = 0; ci < clusters.size(); ++ci) {
+      std::vector<std::size_t> idx;
+      for (std::size_t i : clusters[ci])
+        if (active[i]) idx.push_back(i);
+      if (static_cast<int>(idx.size()) < kClusterMinSize) continue;
+      searched[ci] = sceneDown.select(idx);
+      const PointSet& cl = searched[ci];
+      // Hypotheses: each reference point's PPF peak (ppf.hpp), every kPpfRefStep-th cluster
+      // point a reference, merged, the kPpfRanked most voted re-ranked, the best
+      // hypothesesPerCopy refined.
+      const auto votes = ppf_->match(cl.points(), cl.normals(), kPpfRefStep);
       if (const auto* truth = traceTruth()) {
-        int rank = -1;
-        for (std::size_t i = 0; i < hyps.size() && rank < 0; ++i)
-          if (translationErrorMm(hyps[i].t, *truth) < 15 && rotationErrorDeg(hyps[i].t, *truth) < 15) rank = static_cast<int>(i);
-        std::fprintf(stderr, " cluster %zu (%zu pts): %zu hypotheses, first near the truth at rank %d\n", ci, idx.size(), hyps.size(), rank);
+        int near = 0, maxVotes = 0, maxNear = 0;
+        for (const auto& vote : votes) {
+          maxVotes = std::max(maxVotes, vote.votes);
+          if (translationErrorMm(vote.sceneFromModel, *truth) < 15 && rotationErrorDeg(vote.sceneFromModel, *truth) < 15)
+            ++near, maxNear = std::max(maxNear, vote.votes);
+        }
+        std::fprintf(stderr, " cluster %zu: %zu reference peaks, %d near the truth (most votes %d, near the truth %d)\n", ci, votes.size(), near, maxVotes, maxNear);
       }
+      mergePeaks(votes, merged[ci]);
+      traceRank("merged by votes", ci, merged[ci]);
+      ranked[ci] = rankTop(merged[ci], kPpfRanked);
+      traceRank("re-ranked", ci, ranked[ci]);
+      const auto& hyps = ranked[ci];
       for (std::size_t i = 0; i < hyps.size() && static_cast<int>(i) < params_.hypothesesPerCopy; ++i) {
         Candidate cand;
         cand.camFromModel = hyps[i].t;
@@ -512,15 +598,36 @@ class Locator3dImpl final : public Locator3d {
     }
     stage("  fine");
     if (best.consistent(params_) && best.vis.fitness >= params_.fHigh) return best;
-    // Second round, only when nothing reached f_h: each cluster's next hypotheses (ranks
-    // hypothesesPerCopy .. kSecondRoundRank), all of them through both stages, the best
-    // consistent fit wins (not the first over f_h). docs/3d.md "Recall and speed": the
-    // misses had a hypothesis near the truth at rank 4-7.
+    // Second round, only when nothing reached f_h: per cluster, the other half of its points
+    // as PPF references too (the first round's references shifted by one), their peaks merged
+    // with the first round's, the kPpfRankedSecond most voted re-ranked, and the best
+    // kSecondRoundCount of them not tried in the first round through both stages; the best
+    // consistent fit wins (not the first over f_h). docs/3d.md "Recall (issue 13, fourth
+    // pass)": the misses had a single near-truth peak among every 2nd reference (bracket 120,
+    // housing 319) or their near-truth hypothesis at vote rank 13-22 (bracket 326, housing
+    // 336). Re-ranking 24 in the first round made a bracket turned 180 deg on itself (fitness
+    // 0.98) win on scene 146: the first round keeps its 12.
     std::vector<Candidate> more;
-    for (std::size_t ci = 0; ci < ranked.size(); ++ci)
-      for (std::size_t i = static_cast<std::size_t>(params_.hypothesesPerCopy); i < ranked[ci].size() && i < kSecondRoundRank; ++i) {
+    for (std::size_t ci = 0; ci < ranked.size(); ++ci) {
+      if (searched[ci].size() == 0) continue;
+      const PointSet& cl = searched[ci];
+      Points shiftedP(cl.points().begin() + 1, cl.points().end()), shiftedN(cl.normals().begin() + 1, cl.normals().end());
+      shiftedP.push_back(cl.points().front());
+      shiftedN.push_back(cl.normals().front());
+      mergePeaks(ppf_->match(shiftedP, shiftedN, kPpfRefStep), merged[ci]);
+      const auto second = rankTop(merged[ci], kPpfRankedSecond);
+      traceRank("re-ranked (second round)", ci, second);
+      const std::size_t tried = std::min(ranked[ci].size(), static_cast<std::size_t>(params_.hypothesesPerCopy));
+      std::size_t taken = 0;
+      for (const auto& h : second) {
+        if (taken >= kSecondRoundCount) break;
+        bool done = false;
+        for (std::size_t i = 0; i < tried && !done; ++i)
+          done = translationErrorMm(h.t, ranked[ci][i].t) < 10 && rotationErrorDeg(h.t, ranked[ci][i].t) < 10;
+        if (done) continue;
+        ++taken;
         Candidate cand;
-        cand.camFromModel = ranked[ci][i].t;
+        cand.camFromModel = h.t;
         cand.cluster = static_cast<int>(ci);
         if (coarseRefine(cand, depth, k)) {
           more.push_back(cand);
@@ -529,6 +636,7 @@ class Locator3dImpl final : public Locator3d {
           traceCandidate(cand);
         }
       }
+    }
     for (auto& cand : more) {
       fineRefine(cand, remaining, depth, k);
       ++candidates;
