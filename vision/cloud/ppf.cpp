@@ -90,7 +90,6 @@ std::vector<PpfModel::Vote> PpfModel::match(const std::vector<Eigen::Vector3d>& 
   const std::size_t cells = points_.size() * static_cast<std::size_t>(alphaBins_);
   std::vector<std::uint16_t> acc(cells);
   const double binWidth = 2 * M_PI / alphaBins_;
-  const double perBin = 1 / binWidth;
   for (std::size_t r = 0; r < points.size(); r += static_cast<std::size_t>(std::max(1, refStep))) {
     // (a reference's pairs: with every other cluster point)
     std::fill(acc.begin(), acc.end(), 0);
@@ -109,13 +108,7 @@ std::vector<PpfModel::Vote> PpfModel::match(const std::vector<Eigen::Vector3d>& 
         double a = static_cast<double>(e->alpha) - alphaS;
         if (a < 0) a += 2 * M_PI;
         else if (a >= 2 * M_PI) a -= 2 * M_PI;
-        // The bin is a / binWidth truncated; a multiplication instead of a division (the
-        // division held the loop: ~4 cycles a vote), and the division itself only where the
-        // product lies within 1e-9 of a bin edge (their difference is ~1e-14): same bins.
-        const double f = a * perBin;
-        int bin = static_cast<int>(f);
-        if (const double frac = f - bin; frac < 1e-9 || frac > 1 - 1e-9) bin = static_cast<int>(a / binWidth);
-        bin = std::min(alphaBins_ - 1, bin);
+        const auto bin = std::min(alphaBins_ - 1, static_cast<int>(a / binWidth));
         auto& c = acc[e->cell + static_cast<std::size_t>(bin)];
         if (c < 65535) ++c;
       }
