@@ -27,3 +27,7 @@ target_link_libraries(vgr_opencv INTERFACE opencv_core opencv_imgproc opencv_img
 # threads.
 find_package(Open3D REQUIRED CONFIG)
 find_package(OpenMP REQUIRED COMPONENTS CXX)
+# nanoflann (Debian libnanoflann-dev, header-only): the exact 3-D k-d tree of the 3D locator's
+# ICP (vision/cloud/open3d_backend.cpp IcpTarget, docs/3d.md "Speed"): fixed 3 dimensions and a
+# distance bound per query, which Open3D's KDTreeFlann (dynamic dimension, no bound) lacks.
+find_package(nanoflann REQUIRED CONFIG)

@@ -25,6 +25,7 @@ CELL_PACKAGES=(
   prometheus-cpp-dev  # vgrd's /metrics (prometheus-cpp's core)
   libmosquitto-dev    # vgrd's MQTT sink
   libopen3d-dev       # vision/cloud/ (3D localization, docs/3d.md): the only target linking it
+  libnanoflann-dev    # vision/cloud/: the ICP's exact 3-D k-d tree with a distance bound (header-only)
   libgtest-dev libgmock-dev
 )
 

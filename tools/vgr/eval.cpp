@@ -106,6 +106,11 @@ CLI::App* EvalCommand::add(CLI::App& parent) {
   evalCmd->add_option("--grasp-pos-tol", g.posTolMm, "--grasp: position bound, MM (default 2, paper 003)")
       ->check(CLI::Range(0.0, 1000.0))
       ->needs(graspFlag);
+  evalCmd->add_flag("--no-jaw-check{false}", g.detector.checkJaws, "--grasp: ggcnn takes the network's maps as they are (default: jaws checked on the height map)")
+      ->needs(graspFlag);
+  evalCmd->add_option("--opening-sigma", g.detector.openingSigmaMm, "--grasp: ggcnn weighs quality by the opening's agreement, MM (default 3, 0 off)")
+      ->check(CLI::Range(0.0, 100.0))
+      ->needs(graspFlag);
   evalCmd->add_option("--gripper-opening", g.detector.gripper.maxOpeningMm, "--grasp: widest gripper opening, MM (default 60)")
       ->check(CLI::Range(1.0, 1000.0))
       ->needs(graspFlag);

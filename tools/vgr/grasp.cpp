@@ -204,6 +204,9 @@ CLI::App* GraspDetectCommand::add(CLI::App& parent) {
   c->add_option("--model", o.detector.modelPath, "ggcnn: the ONNX file (models/grasp/ggcnn.onnx)");
   c->add_option("--min-quality", o.detector.minQuality, "ggcnn: peaks below Q are not grasps (default 0.2)")->check(CLI::Range(0.0, 1.0));
   c->add_option("--max-grasps", o.detector.maxGrasps, "at most N grasps per image, best first (default 5)")->check(CLI::Range(1, 100));
+  c->add_flag("--no-jaw-check{false}", o.detector.checkJaws, "ggcnn: take the network's maps as they are (default: jaws checked on the height map)");
+  c->add_option("--opening-sigma", o.detector.openingSigmaMm, "ggcnn: weigh quality by the opening's agreement, MM (default 3, 0 off)")
+      ->check(CLI::Range(0.0, 100.0));
   c->add_option("--gripper-opening", o.detector.gripper.maxOpeningMm, "widest gripper opening, MM (default 60)")->check(CLI::Range(1.0, 1000.0));
   c->add_option("--camera-pose", o.cameraPose, "3D calibration: handeye.yaml of the fixed depth camera (eye-to-hand, X = T_base_cam)");
   c->add_option("--intrinsics", o.intrinsics, "plane calibration: intrinsics.yaml");

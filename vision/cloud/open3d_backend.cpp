@@ -13,6 +13,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
+#include <nanoflann.hpp>
 #include <open3d/geometry/KDTreeFlann.h>
 #include <open3d/geometry/PointCloud.h>
 #include <open3d/pipelines/registration/CorrespondenceChecker.h>
@@ -48,6 +49,57 @@ void quietOpen3d() {
     return true;
   }();
   (void)once;
+}
+
+// A fixed 3-D point set as nanoflann reads it (the points are not copied).
+struct PointsAdaptor {
+  const Points* points = nullptr;
+  std::size_t kdtree_get_point_count() const { return points->size(); }
+  double kdtree_get_pt(std::size_t i, std::size_t d) const { return (*points)[i][static_cast<Eigen::Index>(d)]; }
+  template <class Box>
+  bool kdtree_get_bbox(Box&) const {
+    return false;
+  }
+};
+
+// The exact nearest-neighbour index of IcpTarget and NearestIndex: nanoflann with the
+// dimension fixed at 3 and a distance bound per query. Open3D's KDTreeFlann (nanoflann with a
+// run-time dimension, a std::vector result per call, no bound) took 47 % of a locate() call
+// in ICP's pairing (callgrind, bracket scenes 100-102; docs/3d.md "Speed").
+class Tree3 {
+ public:
+  explicit Tree3(const Points& points)
+      : adaptor_{&points}, tree_(3, adaptor_, nanoflann::KDTreeSingleIndexAdaptorParams(10)) {}
+  // The nearest point closer than sqrt(bound2) (strictly): its index and squared distance
+  // (the sum of the squared coordinate differences, x, y, z in that order, as Open3D's); -1
+  // when none is. Exact: the bound only prunes the search.
+  int nearest(const Eigen::Vector3d& p, double bound2, double& d2) const {
+    nanoflann::KNNResultSet<double, std::uint32_t> result(1);
+    std::uint32_t index = 0;
+    double dist = 0;
+    result.init(&index, &dist);
+    dist = bound2;  // the result set's worst distance: only closer points are added
+    tree_.findNeighbors(result, p.data(), nanoflann::SearchParams());
+    if (result.size() == 0) return -1;
+    d2 = dist;
+    return static_cast<int>(index);
+  }
+  // The points closer than sqrt(radius2) (strictly, as Open3D's radius search), with their
+  // squared distances; nearest first when `sorted`.
+  void within(const Eigen::Vector3d& p, double radius2, std::vector<std::pair<std::uint32_t, double>>& out, bool sorted) const {
+    tree_.radiusSearch(p.data(), radius2, out, nanoflann::SearchParams(32, 0, sorted));
+  }
+
+ private:
+  using Index = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, PointsAdaptor>, PointsAdaptor, 3, std::uint32_t>;
+  PointsAdaptor adaptor_;
+  Index tree_;
+};
+
+// The squared distance as Tree3 computes it (same order of operations).
+double squaredDistance(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  const double dx = a.x() - b.x(), dy = a.y() - b.y(), dz = a.z() - b.z();
+  return dx * dx + dy * dy + dz * dz;
 }
 
 Registration fromResult(const reg::RegistrationResult& r) {
@@ -133,22 +185,26 @@ void PointSet::estimateNormalsFrom(const PointSet& dense, double radiusMm, const
   auto& cloud = impl_->cloud;
   cloud.normals_.assign(cloud.points_.size(), Eigen::Vector3d::UnitZ());
   if (dense.size() == 0) return;
-  KDTreeFlann tree(dense.impl().cloud);
-  std::vector<int> idx;
-  std::vector<double> d2;
+  // The 60 nearest dense points within radiusMm (Open3D's hybrid search: the sorted radius
+  // search cut at 60), on Tree3.
+  constexpr std::size_t maxNn = 60;
   const auto& dp = dense.points();
+  const Tree3 tree(dp);
+  std::vector<std::pair<std::uint32_t, double>> found;
   for (std::size_t i = 0; i < cloud.points_.size(); ++i) {
     const Eigen::Vector3d& p = cloud.points_[i];
-    if (tree.SearchHybrid(p, radiusMm, 60, idx, d2) < 3) {
+    tree.within(p, radiusMm * radiusMm, found, true);
+    if (found.size() > maxNn) found.resize(maxNn);
+    if (found.size() < 3) {
       cloud.normals_[i] = (viewpoint - p).normalized();
       continue;
     }
     Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    for (int j : idx) mean += dp[static_cast<std::size_t>(j)];
-    mean /= static_cast<double>(idx.size());
+    for (const auto& f : found) mean += dp[f.first];
+    mean /= static_cast<double>(found.size());
     Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-    for (int j : idx) {
-      const Eigen::Vector3d d = dp[static_cast<std::size_t>(j)] - mean;
+    for (const auto& f : found) {
+      const Eigen::Vector3d d = dp[f.first] - mean;
       cov += d * d.transpose();
     }
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
@@ -210,8 +266,47 @@ void PointSet::setFeaturesFrom(const std::vector<PointSet>& parts) {
 }
 
 std::vector<int> PointSet::clusters(double epsMm, int minPoints) const {
-  if (size() == 0) return {};
-  return impl_->cloud.ClusterDBSCAN(epsMm, static_cast<std::size_t>(std::max(1, minPoints)), false);
+  // DBSCAN labelled as Open3D's ClusterDBSCAN labels it (same neighbours: the points closer
+  // than eps, the point itself included; clusters numbered by their first point; a border
+  // point two clusters reach belongs to the first), on Tree3: Open3D's took 10 % of a
+  // locate() call (callgrind, bracket 100-102), most of it in its k-d tree.
+  const auto& pts = impl_->cloud.points_;
+  if (pts.empty()) return {};
+  const auto minPts = static_cast<std::size_t>(std::max(1, minPoints));
+  const Tree3 tree(pts);
+  std::vector<std::uint32_t> first(pts.size() + 1, 0), neighbours;
+  std::vector<std::pair<std::uint32_t, double>> found;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    tree.within(pts[i], epsMm * epsMm, found, false);
+    first[i] = static_cast<std::uint32_t>(neighbours.size());
+    for (const auto& f : found) neighbours.push_back(f.first);
+  }
+  first[pts.size()] = static_cast<std::uint32_t>(neighbours.size());
+  auto count = [&](std::size_t i) { return static_cast<std::size_t>(first[i + 1] - first[i]); };
+  std::vector<int> labels(pts.size(), -2);  // -2 not visited, -1 noise
+  std::vector<std::uint32_t> open;
+  int label = 0;
+  for (std::size_t seed = 0; seed < pts.size(); ++seed) {
+    if (labels[seed] != -2) continue;
+    if (count(seed) < minPts) {
+      labels[seed] = -1;
+      continue;
+    }
+    labels[seed] = label;
+    open.assign(neighbours.begin() + first[seed], neighbours.begin() + first[seed + 1]);
+    while (!open.empty()) {
+      const std::uint32_t q = open.back();
+      open.pop_back();
+      if (labels[q] == -1) labels[q] = label;  // a border point, not expanded
+      if (labels[q] != -2) continue;
+      labels[q] = label;
+      if (count(q) >= minPts)
+        for (std::uint32_t j = first[q]; j < first[q + 1]; ++j)
+          if (labels[neighbours[j]] < 0) open.push_back(neighbours[j]);
+    }
+    ++label;
+  }
+  return labels;
 }
 
 PointSet::Plane PointSet::segmentPlane(double distanceMm, int iterations) const {
@@ -445,12 +540,12 @@ Registration icpPointToPlane(const PointSet& source, const PointSet& target, dou
 
 struct IcpTarget::Impl {
   PointCloud cloud;
-  KDTreeFlann tree;
+  std::unique_ptr<Tree3> tree;
 };
 
 IcpTarget::IcpTarget(const PointSet& target) : impl_(std::make_unique<Impl>()) {
   impl_->cloud = target.impl().cloud;
-  if (!impl_->cloud.points_.empty()) impl_->tree.SetGeometry(impl_->cloud);
+  if (!impl_->cloud.points_.empty()) impl_->tree = std::make_unique<Tree3>(impl_->cloud.points_);
 }
 IcpTarget::~IcpTarget() = default;
 
@@ -466,17 +561,25 @@ Registration IcpTarget::align(const PointSet& source, double maxDist, double max
   const double cosMin = std::cos(maxAngleDeg * M_PI / 180.0);
   const double max2 = maxDist * maxDist;
   Eigen::Matrix4d t = init;
-  std::vector<int> idx(1);
-  std::vector<double> d2(1);
+  // Pairs: each source point's nearest target point within maxDist (the same pairs as an
+  // unbounded nearest-neighbour search followed by the distance test). The search is bounded
+  // by maxDist and, from the second pass on, by the distance to the point's previous partner
+  // (the estimate moves little between steps): the nearest point is never farther.
+  const double bound = std::nextafter(max2, std::numeric_limits<double>::infinity());
+  std::vector<int> partner(sp.size(), -1);
   auto pairUp = [&](const Eigen::Matrix4d& cur, auto&& visit) {
     const Eigen::Matrix3d r = cur.topLeftCorner<3, 3>();
     const Eigen::Vector3d tr = cur.topRightCorner<3, 1>();
     for (std::size_t i = 0; i < sp.size(); ++i) {
       const Eigen::Vector3d p = r * sp[i] + tr;
-      if (impl_->tree.SearchKNN(p, 1, idx, d2) < 1 || d2[0] > max2) continue;
-      const auto j = static_cast<std::size_t>(idx[0]);
+      double b = bound;
+      if (partner[i] >= 0) b = std::min(b, squaredDistance(p, tp[static_cast<std::size_t>(partner[i])]) * (1 + 1e-9) + 1e-12);
+      double d2 = 0;
+      partner[i] = impl_->tree->nearest(p, b, d2);
+      if (partner[i] < 0) continue;
+      const auto j = static_cast<std::size_t>(partner[i]);
       if ((r * sn[i]).dot(tn[j]) < cosMin) continue;
-      visit(p, tp[j], tn[j], d2[0]);
+      visit(p, tp[j], tn[j], d2);
     }
   };
   for (int it = 0; it < iterations; ++it) {
@@ -582,22 +685,22 @@ PoseGraphResult optimisePoseGraph(const std::vector<Eigen::Matrix4d>& nodes, con
 }
 
 struct NearestIndex::Impl {
-  PointCloud cloud;
-  KDTreeFlann tree;
+  Points points;
+  std::unique_ptr<Tree3> tree;
 };
 
 NearestIndex::NearestIndex(const Points& points) : impl_(std::make_unique<Impl>()) {
-  impl_->cloud.points_ = points;
-  if (!points.empty()) impl_->tree.SetGeometry(impl_->cloud);
+  impl_->points = points;
+  if (!points.empty()) impl_->tree = std::make_unique<Tree3>(impl_->points);
 }
 NearestIndex::~NearestIndex() = default;
 
 std::pair<double, int> NearestIndex::nearest(const Eigen::Vector3d& p) const {
-  if (impl_->cloud.points_.empty()) return {std::numeric_limits<double>::infinity(), -1};
-  std::vector<int> idx(1);
-  std::vector<double> d2(1);
-  if (impl_->tree.SearchKNN(p, 1, idx, d2) < 1) return {std::numeric_limits<double>::infinity(), -1};
-  return {d2[0], idx[0]};
+  if (!impl_->tree) return {std::numeric_limits<double>::infinity(), -1};
+  double d2 = 0;
+  const int i = impl_->tree->nearest(p, std::numeric_limits<double>::infinity(), d2);
+  if (i < 0) return {std::numeric_limits<double>::infinity(), -1};
+  return {d2, i};
 }
 
 }  // namespace vgr::vision::cloud::backend

@@ -44,24 +44,29 @@ PpfModel::PpfModel(std::vector<Eigen::Vector3d> points, std::vector<Eigen::Vecto
   for (const auto& a : points_)
     for (const auto& b : points_) maxDist_ = std::max(maxDist_, (a - b).norm());
   for (std::size_t i = 0; i < points_.size(); ++i) frames_.push_back(localFrame(points_[i], normals_[i]));
+  std::vector<Entry> entries;
   for (std::size_t i = 0; i < points_.size(); ++i)
     for (std::size_t j = 0; j < points_.size(); ++j) {
       std::uint32_t k = 0;
       if (i == j || !key(points_[i], normals_[i], points_[j], normals_[j], k)) continue;
-      entries_.push_back({k, static_cast<std::uint32_t>(i), static_cast<float>(alphaOf(frames_[i], points_[j]))});
+      entries.push_back({k, static_cast<std::uint32_t>(i), static_cast<float>(alphaOf(frames_[i], points_[j]))});
     }
-  std::sort(entries_.begin(), entries_.end(), [](const Entry& a, const Entry& b) { return a.key < b.key; });
+  std::sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) { return a.key < b.key; });
   // Keys shared by more model pairs than the model has points (coplanar pairs of its large
   // faces: 20-30 % of all pairs in a few keys) are dropped: they fix 3 of 6 degrees of
   // freedom, cost most of the voting time and make flat clutter vote as loud as the part.
-  std::vector<Entry> kept;
-  for (std::size_t i = 0; i < entries_.size();) {
+  for (std::size_t i = 0; i < entries.size();) {
     std::size_t j = i;
-    while (j < entries_.size() && entries_[j].key == entries_[i].key) ++j;
-    if (j - i <= maxBucket_) kept.insert(kept.end(), entries_.begin() + static_cast<long>(i), entries_.begin() + static_cast<long>(j));
+    while (j < entries.size() && entries[j].key == entries[i].key) ++j;
+    if (j - i <= maxBucket_) {
+      keys_.push_back(entries[i].key);
+      first_.push_back(static_cast<std::uint32_t>(votes_.size()));
+      for (std::size_t e = i; e < j; ++e)
+        votes_.push_back({entries[e].point * static_cast<std::uint32_t>(alphaBins_), entries[e].alpha});
+    }
     i = j;
   }
-  entries_ = std::move(kept);
+  first_.push_back(static_cast<std::uint32_t>(votes_.size()));
 }
 
 bool PpfModel::key(const Eigen::Vector3d& p1, const Eigen::Vector3d& n1, const Eigen::Vector3d& p2, const Eigen::Vector3d& n2,
@@ -81,7 +86,7 @@ bool PpfModel::key(const Eigen::Vector3d& p1, const Eigen::Vector3d& n1, const E
 std::vector<PpfModel::Vote> PpfModel::match(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,
                                             int refStep) const {
   std::vector<Vote> out;
-  if (points.size() < 2 || entries_.empty()) return out;
+  if (points.size() < 2 || votes_.empty()) return out;
   const std::size_t cells = points_.size() * static_cast<std::size_t>(alphaBins_);
   std::vector<std::uint16_t> acc(cells);
   const double binWidth = 2 * M_PI / alphaBins_;
@@ -92,14 +97,19 @@ std::vector<PpfModel::Vote> PpfModel::match(const std::vector<Eigen::Vector3d>& 
     for (std::size_t j = 0; j < points.size(); ++j) {
       std::uint32_t k = 0;
       if (j == r || !key(points[r], normals[r], points[j], normals[j], k)) continue;
+      const auto found = std::lower_bound(keys_.begin(), keys_.end(), k);
+      if (found == keys_.end() || *found != k) continue;
       const double alphaS = alphaOf(frame, points[j]);
-      auto it = std::lower_bound(entries_.begin(), entries_.end(), k, [](const Entry& e, std::uint32_t v) { return e.key < v; });
-      for (; it != entries_.end() && it->key == k; ++it) {
-        // Drost eq. 3: sceneFromModel = T_s^-1 R_x(alpha_m - alpha_s) T_m
-        double a = static_cast<double>(it->alpha) - alphaS;
-        a -= 2 * M_PI * std::floor(a / (2 * M_PI));
+      const auto at = static_cast<std::size_t>(found - keys_.begin());
+      const Slot* const end = votes_.data() + first_[at + 1];
+      for (const Slot* e = votes_.data() + first_[at]; e != end; ++e) {
+        // Drost eq. 3: sceneFromModel = T_s^-1 R_x(alpha_m - alpha_s) T_m. Both alphas lie in
+        // [-pi, pi], so the difference wraps into [0, 2 pi) by one addition or subtraction.
+        double a = static_cast<double>(e->alpha) - alphaS;
+        if (a < 0) a += 2 * M_PI;
+        else if (a >= 2 * M_PI) a -= 2 * M_PI;
         const auto bin = std::min(alphaBins_ - 1, static_cast<int>(a / binWidth));
-        auto& c = acc[static_cast<std::size_t>(it->point) * static_cast<std::size_t>(alphaBins_) + static_cast<std::size_t>(bin)];
+        auto& c = acc[e->cell + static_cast<std::size_t>(bin)];
         if (c < 65535) ++c;
       }
     }

@@ -45,7 +45,7 @@ class PpfModel {
   // reference paired with all others; each reference's peak is returned (votes > 0).
   std::vector<Vote> match(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals, int refStep) const;
 
-  std::size_t pairs() const { return entries_.size(); }
+  std::size_t pairs() const { return votes_.size(); }
   std::size_t size() const { return points_.size(); }
 
  private:
@@ -54,12 +54,20 @@ class PpfModel {
     std::uint32_t point;  // model reference point
     float alpha;          // rotation of the pair about the reference normal into the x-y half-plane
   };
+  // What the voting loop reads of an entry: its first accumulator cell (point x alphaBins)
+  // and its alpha; the entries of one key are votes_[first_[i], first_[i + 1]) for keys_[i].
+  struct Slot {
+    std::uint32_t cell;
+    float alpha;
+  };
   bool key(const Eigen::Vector3d& p1, const Eigen::Vector3d& n1, const Eigen::Vector3d& p2, const Eigen::Vector3d& n2,
            std::uint32_t& out) const;
 
   std::vector<Eigen::Vector3d> points_, normals_;
   std::vector<Eigen::Matrix4d> frames_;  // per model point: T_g (point to origin, normal to +x)
-  std::vector<Entry> entries_;           // sorted by key
+  std::vector<std::uint32_t> keys_;      // the stored keys, ascending, each once
+  std::vector<std::uint32_t> first_;     // keys_.size() + 1 offsets into votes_
+  std::vector<Slot> votes_;              // the entries, sorted by key
   double distStep_, angleStep_, maxDist_, cosMaxNormal_;
   int alphaBins_;
   std::size_t maxBucket_;

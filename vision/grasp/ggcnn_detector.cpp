@@ -17,6 +17,48 @@ namespace {
 constexpr double kDeg = M_PI / 180.0;
 constexpr double kPeakSigmaPx = 1.0;   // network px
 constexpr int kPeakSeparationPx = 5;   // network px
+constexpr int kRerankFactor = 4;          // peaks looked at per grasp returned, when the jaw check re-ranks them
+constexpr double kJawBlockedShare = 0.1;  // more of a footprint's pixels with data in the way: the jaw collides
+
+// The jaws (docs/grasp.md "Network"): a jaw comes down beside the grasp along the optical
+// axis to the height of the grasp centre. Its footprint on the height map (mm, NaN = no
+// data) is a band jawThicknessMm across, jawLengthMm along, its inner face `inner` px from the
+// centre on `side` of the closing axis; it is clear when the band lies at least marginMm below
+// the centre's height: the truth's rule 3 (docs/grasp.md "Ground truth") on the measured image
+// instead of the exact surfaces. Up to kJawBlockedShare of its pixels with data may be in the
+// way (single noisy pixels at depth jumps); pixels without data do not count.
+struct JawGeometry {
+  cv::Point2d centre, across, along;
+  double thickPx = 0, lenPx = 0, limitMm = 0;
+};
+
+JawGeometry jawGeometry(const Grasp& g, double pxPerMm, double thicknessMm, double marginMm) {
+  const double th = g.angleDeg * kDeg;
+  return {{g.u, g.v}, {std::cos(th), -std::sin(th)}, {std::sin(th), std::cos(th)}, thicknessMm * pxPerMm, g.jawPx, g.heightMm - marginMm};
+}
+
+bool jawClear(const cv::Mat& heights, const JawGeometry& j, int side, double inner) {
+  int valid = 0, blocked = 0;
+  for (double t = inner + 0.5; t <= inner + j.thickPx; t += 1.0)
+    for (double l = -j.lenPx / 2; l <= j.lenPx / 2; l += 1.0) {
+      const cv::Point2d p = j.centre + j.across * (side * t) + j.along * l;
+      const int x = static_cast<int>(std::lround(p.x)), y = static_cast<int>(std::lround(p.y));
+      if (x < 0 || y < 0 || x >= heights.cols || y >= heights.rows) continue;
+      const float h = heights.at<float>(y, x);
+      if (!std::isfinite(h)) continue;
+      ++valid;
+      blocked += h > j.limitMm;
+    }
+  return blocked <= kJawBlockedShare * valid;
+}
+
+// The nearest clear place of a jaw on `side`, px from the centre (the object's face there),
+// searched outward 1 px at a time up to maxPx; -1 when there is none.
+double nearestClear(const cv::Mat& heights, const JawGeometry& j, int side, double maxPx) {
+  for (double t = 0; t <= maxPx; t += 1.0)
+    if (jawClear(heights, j, side, t)) return t;
+  return -1;
+}
 
 // OpenCV's exception text is several lines ("OpenCV(4.6.0) file:line: error: (-5:Bad
 // argument) WHY in function 'f'", nested for ONNX nodes): the innermost WHY, on one line.
@@ -112,7 +154,8 @@ class GgcnnDetector final : public GraspDetector {
     std::vector<Grasp> grasps;
     std::vector<Peak> kept;
     for (const auto& p : peaks) {
-      if (static_cast<int>(grasps.size()) >= o_.maxGrasps) break;
+      // The jaw check re-ranks (below): it looks at kRerankFactor times as many peaks.
+      if (static_cast<int>(grasps.size()) >= (o_.checkJaws ? kRerankFactor : 1) * o_.maxGrasps) break;
       const bool near = std::any_of(kept.begin(), kept.end(), [&](const Peak& k) {
         return std::hypot(k.x - p.x, k.y - p.y) < kPeakSeparationPx;
       });
@@ -142,8 +185,37 @@ class GgcnnDetector final : public GraspDetector {
       g.heightMm = floor->nx * pc.x + floor->ny * pc.y + floor->nz * pc.z - floor->offset;
       // Higher than any part stands: a bin wall or a fixture, as for the analytic detector.
       if (g.heightMm > o_.maxObjectHeightMm) continue;
+      if (o_.checkJaws) {
+        // The jaws: each one's nearest clear place across the closing axis on the height map
+        // (the object's face there; nothing clear within the gripper's opening: not a grasp),
+        // the opening read from them plus both clearances, the centre moved to the middle
+        // between them. The network's own opening says what object it took this for: the
+        // grasp's quality is weighed by how well it agrees with the one read (a clutter box
+        // taken for a part, or a peak off the part's middle, disagrees).
+        const double pxPerMm = f.camera.fx / g.depthMm;
+        const JawGeometry j = jawGeometry(g, pxPerMm, o_.gripper.jawThicknessMm, o_.jawMarginMm);
+        const double maxPx = o_.gripper.maxOpeningMm * pxPerMm;
+        const double lo = nearestClear(heights, j, -1, maxPx), hi = nearestClear(heights, j, 1, maxPx);
+        if (lo < 0 || hi < 0) continue;
+        const double widthPx = lo + hi + 2 * o_.gripper.clearanceMm * pxPerMm;
+        if (widthPx > maxPx) continue;
+        if (o_.openingSigmaMm > 0) {
+          const double dw = (widthPx - g.widthPx) / pxPerMm;
+          g.quality *= std::exp(-0.5 * dw * dw / (o_.openingSigmaMm * o_.openingSigmaMm));
+        }
+        const cv::Point2d c = j.centre + j.across * ((hi - lo) / 2);
+        const double depth = depthNear(f.zMm, c.x, c.y);
+        if (!(depth > 0)) continue;
+        g.u = c.x, g.v = c.y, g.depthMm = depth, g.widthPx = widthPx, g.widthMm = widthPx * depth / f.camera.fx;
+        g.jawPx = o_.gripper.jawLengthMm * f.camera.fx / depth;
+        const auto pm = backProject(f.camera, g.u, g.v, depth);
+        g.heightMm = floor->nx * pm.x + floor->ny * pm.y + floor->nz * pm.z - floor->offset;
+      }
       grasps.push_back(g);
     }
+    // Best first by the weighed quality; up to maxGrasps.
+    std::stable_sort(grasps.begin(), grasps.end(), [](const Grasp& a, const Grasp& b) { return a.quality > b.quality; });
+    if (static_cast<int>(grasps.size()) > o_.maxGrasps) grasps.resize(static_cast<std::size_t>(o_.maxGrasps));
     return grasps;
   }
 

@@ -27,6 +27,9 @@ Result<void> checkOptions(const GraspDetectorOptions& o) {
   if (!(g.maxOpeningMm > 0) || g.maxOpeningMm > 1000) return bad(fmt::format("gripper opening {} mm: expected (0, 1000]", g.maxOpeningMm));
   if (!(g.clearanceMm >= 0) || g.clearanceMm > 50) return bad(fmt::format("jaw clearance {} mm: expected [0, 50]", g.clearanceMm));
   if (!(g.jawLengthMm > 0) || g.jawLengthMm > 200) return bad(fmt::format("jaw length {} mm: expected (0, 200]", g.jawLengthMm));
+  if (!(g.jawThicknessMm > 0) || g.jawThicknessMm > 50) return bad(fmt::format("jaw thickness {} mm: expected (0, 50]", g.jawThicknessMm));
+  if (!(o.jawMarginMm >= 0) || o.jawMarginMm > 100) return bad(fmt::format("jaw margin {} mm: expected [0, 100]", o.jawMarginMm));
+  if (!(o.openingSigmaMm >= 0) || o.openingSigmaMm > 100) return bad(fmt::format("opening sigma {} mm: expected [0, 100]", o.openingSigmaMm));
   if (!(o.minObjectHeightMm > 0) || o.minObjectHeightMm > 1000 || !(o.maxObjectHeightMm > o.minObjectHeightMm))
     return bad(fmt::format("object heights {}..{} mm: expected 0 < min < max, min <= 1000", o.minObjectHeightMm, o.maxObjectHeightMm));
   if (o.minObjectAreaPx < 1 || o.minObjectAreaPx > 10000000) return bad(fmt::format("min object area {} px: expected 1..1e7", o.minObjectAreaPx));

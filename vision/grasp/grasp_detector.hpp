@@ -32,6 +32,7 @@ struct Gripper {
   double maxOpeningMm = 60;   // (0, 1000] widest opening: wider sections are not grasped
   double clearanceMm = 2;     // [0, 50] open jaw to the face it closes on (each side)
   double jawLengthMm = 10;    // (0, 200] a jaw's size along the faces: the grasp rectangle's height
+  double jawThicknessMm = 5;  // (0, 50] a jaw's size across, outside the opening (the footprint it needs free)
 };
 
 struct Grasp {
@@ -50,6 +51,14 @@ struct GraspDetectorOptions {
   std::string modelPath;           // ggcnn: the ONNX file (required)
   double minQuality = 0.2;         // [0, 1] ggcnn: peaks below this are not grasps ("not found"); from the validation sweep (docs/grasp.md)
   int maxGrasps = 5;               // [1, 100] at most this many grasps, best first
+  // ggcnn: the jaws checked on the height map (docs/grasp.md "Network"): the opening and the
+  // centre across read from where each jaw first finds room to come down to the centre's
+  // height (at least jawMarginMm below it), a peak without room within the gripper's opening
+  // dropped, and the quality weighed by exp(-d^2 / 2 openingSigmaMm^2), d the difference between
+  // the network's opening and the one read (0: not weighed). Off: the network's maps as they are.
+  bool checkJaws = true;
+  double jawMarginMm = 2;          // [0, 100]
+  double openingSigmaMm = 3;       // [0, 100]
   Gripper gripper;
   FloorOptions floor;
   // What counts as an object above the floor (mm, px at full resolution). maxObjectHeightMm
