@@ -539,6 +539,19 @@ class Locator3dImpl final : public Locator3d {
         if (translationErrorMm(hyps[i].t, *truth) < 15 && rotationErrorDeg(hyps[i].t, *truth) < 15) rank = static_cast<int>(i);
       std::fprintf(stderr, " cluster %zu: %zu %s, first near the truth at rank %d\n", ci, hyps.size(), what, rank);
     };
+    // A hypothesis of cluster ci through the coarse stages: kept in `out` when it passes their
+    // gate, else counted and traced as a tried candidate.
+    const auto tryCoarse = [&](const Eigen::Matrix4d& t, std::size_t ci, std::vector<Candidate>& out) {
+      Candidate cand;
+      cand.camFromModel = t;
+      cand.cluster = static_cast<int>(ci);
+      if (coarseRefine(cand, depth, k)) {
+        out.push_back(cand);
+      } else {
+        ++candidates;
+        traceCandidate(cand);
+      }
+    };
     std::vector<std::vector<Hyp>> merged(clusters.size());  // per cluster, every peak merged, most voted first
     std::vector<std::vector<Hyp>> ranked(clusters.size());  // per cluster, the first round's, best first
     std::vector<PointSet> searched(clusters.size());        // per cluster, its active points with normals
@@ -567,17 +580,8 @@ class Locator3dImpl final : public Locator3d {
       ranked[ci] = rankTop(merged[ci], kPpfRanked);
       traceRank("re-ranked", ci, ranked[ci]);
       const auto& hyps = ranked[ci];
-      for (std::size_t i = 0; i < hyps.size() && static_cast<int>(i) < params_.hypothesesPerCopy; ++i) {
-        Candidate cand;
-        cand.camFromModel = hyps[i].t;
-        cand.cluster = static_cast<int>(ci);
-        if (coarseRefine(cand, depth, k)) {
-          coarse.push_back(cand);
-        } else {
-          ++candidates;
-          traceCandidate(cand);
-        }
-      }
+      for (std::size_t i = 0; i < hyps.size() && static_cast<int>(i) < params_.hypothesesPerCopy; ++i)
+        tryCoarse(hyps[i].t, ci, coarse);
     }
     stage("  ppf + coarse ICP");
     // The fine stage, best coarse fit first (over all clusters), until one is accepted at f_h.
@@ -626,15 +630,7 @@ class Locator3dImpl final : public Locator3d {
           done = translationErrorMm(h.t, ranked[ci][i].t) < 10 && rotationErrorDeg(h.t, ranked[ci][i].t) < 10;
         if (done) continue;
         ++taken;
-        Candidate cand;
-        cand.camFromModel = h.t;
-        cand.cluster = static_cast<int>(ci);
-        if (coarseRefine(cand, depth, k)) {
-          more.push_back(cand);
-        } else {
-          ++candidates;
-          traceCandidate(cand);
-        }
+        tryCoarse(h.t, ci, more);
       }
     }
     for (auto& cand : more) {
